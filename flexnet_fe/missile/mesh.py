@@ -1,0 +1,185 @@
+"""Gmsh meshes of the missile: one all-quadrilateral shell mesh per fin, a body surface mesh.
+
+Fin meshes: the fin's mid-plane trapezoid placed in 3-D where it sits on the missile (body frame
+B, :mod:`flexnet_fe.missile.geometry`), meshed as a transfinite (structured) grid and recombined
+into quadrilaterals only — dolfinx 0.5.2 cannot load mixed triangle/quadrilateral meshes. Root and
+tip get ``n_chord`` divisions, leading and trailing edge ``n_span`` divisions:
+``n_chord = ceil(mean chord / h_e)``, ``n_span = ceil(longer of LE, TE / h_e)`` with the element
+size h_e = ``cfg.mesh_size``. Physical groups (names and fixed tags in :data:`PHYSICAL_TAGS`):
+``surface`` (2-D), ``root``, ``leading_edge``, ``tip``, ``trailing_edge`` (1-D).
+
+Body mesh (pictures only, triangles): the body profile revolved about the x_b axis; physical
+surfaces ``nose``, ``body`` (cylinder), ``base``.
+
+Gmsh 4.8.4 (Debian) crashes with ``Mesh.Algorithm = 8``; it is not used here. dolfinx 0.5.2's
+``gmshio.read_from_msh`` is broken (undefined names), so :func:`load_fin_mesh` opens the file with
+gmsh on rank 0 and calls ``gmshio.model_to_mesh(..., gdim=3)`` itself. gmsh is initialised once per
+process and never finalised here (see :func:`gmsh_model`).
+"""
+
+from __future__ import annotations
+
+import math
+from contextlib import contextmanager
+from pathlib import Path
+
+import numpy as np
+
+from flexnet_fe.missile.config import MissileConfig
+from flexnet_fe.missile.geometry import EDGE_NAMES, Fin, Missile, PrimKind, build_missile
+
+PHYSICAL_TAGS: dict[str, int] = {"surface": 1, "root": 11, "leading_edge": 12, "tip": 13,
+                                 "trailing_edge": 14}
+"""Physical-group tags of every fin mesh (cell tags: ``surface``; facet tags: the four edges)."""
+
+BODY_TAGS: dict[str, int] = {"body": 1, "nose": 2, "base": 3}
+"""Physical-group tags of the body surface mesh."""
+
+
+_GMSH_READY = {"done": False}
+_SAVED_OPTIONS = ("General.Terminal", "Mesh.MeshSizeMax", "Mesh.MshFileVersion")
+
+
+@contextmanager
+def gmsh_model(name: str):
+    """A fresh gmsh model ``name`` in this process's gmsh, removed on exit.
+
+    gmsh is initialised once per process and never finalised here, so other modules that keep
+    gmsh initialised (e.g. the shell stage's mesh reader) are not broken by a finalise; the
+    global options this module changes are restored on exit.
+    """
+    import gmsh
+
+    if not _GMSH_READY["done"]:
+        gmsh.initialize()  # a second initialise elsewhere only prints a warning (gmsh 4.8)
+        _GMSH_READY["done"] = True
+    try:
+        gmsh.model.add(name)
+    except Exception:  # gmsh was finalised by someone else since: initialise again
+        gmsh.initialize()
+        gmsh.model.add(name)
+    saved = {k: gmsh.option.getNumber(k) for k in _SAVED_OPTIONS}
+    gmsh.option.setNumber("General.Terminal", 0)
+    try:
+        yield gmsh
+    finally:
+        gmsh.model.setCurrent(name)
+        gmsh.model.remove()
+        for k, v in saved.items():
+            gmsh.option.setNumber(k, v)
+
+
+def fin_divisions(fin: Fin, mesh_size: float) -> tuple[int, int]:
+    """(n_chord, n_span): element counts along root/tip and along leading/trailing edge."""
+    n_chord = max(1, math.ceil(0.5 * (fin.root_chord + fin.tip_chord) / mesh_size))
+    n_span = max(1, math.ceil(max(fin.edge_length(1), fin.edge_length(3)) / mesh_size))
+    return n_chord, n_span
+
+
+def build_fin_model(gmsh, fin: Fin, mesh_size: float) -> None:
+    """Add the fin's all-quadrilateral mesh with its physical groups to the current gmsh model."""
+    geo = gmsh.model.geo
+    pts = [geo.addPoint(*map(float, c)) for c in fin.corners]  # root TE, root LE, tip LE, tip TE
+    lines = [geo.addLine(pts[k], pts[(k + 1) % 4]) for k in range(4)]  # EDGE_NAMES order
+    loop = geo.addCurveLoop(lines)
+    surf = geo.addPlaneSurface([loop])
+    n_chord, n_span = fin_divisions(fin, mesh_size)
+    for k, line in enumerate(lines):
+        geo.mesh.setTransfiniteCurve(line, (n_chord if k in (0, 2) else n_span) + 1)
+    geo.mesh.setTransfiniteSurface(surf, "Left", pts)
+    geo.mesh.setRecombine(2, surf)
+    geo.synchronize()
+    gmsh.model.addPhysicalGroup(2, [surf], PHYSICAL_TAGS["surface"])
+    gmsh.model.setPhysicalName(2, PHYSICAL_TAGS["surface"], "surface")
+    for k, name in enumerate(EDGE_NAMES):
+        gmsh.model.addPhysicalGroup(1, [lines[k]], PHYSICAL_TAGS[name])
+        gmsh.model.setPhysicalName(1, PHYSICAL_TAGS[name], name)
+    gmsh.model.mesh.generate(2)
+
+
+def build_body_model(gmsh, missile: Missile, mesh_size: float) -> None:
+    """Add the body surface (profile revolved about x_b in four quarter turns) to the model."""
+    geo = gmsh.model.geo
+    R = missile.radius
+    nose, cyl, base = missile.profile
+    apex = geo.addPoint(0.0, 0.0, 0.0, mesh_size)
+    p_nose = geo.addPoint(-missile.nose_length, R, 0.0, mesh_size)
+    p_base = geo.addPoint(-missile.length, R, 0.0, mesh_size)
+    p_axis = geo.addPoint(-missile.length, 0.0, 0.0, mesh_size)
+    if nose.kind is PrimKind.SEGMENT:
+        c_nose = geo.addLine(apex, p_nose)
+    else:
+        sc, rc = nose.data[0], nose.data[1]
+        centre = geo.addPoint(-sc, rc, 0.0, mesh_size)
+        c_nose = geo.addCircleArc(apex, centre, p_nose)
+    curves = {"nose": c_nose, "body": geo.addLine(p_nose, p_base),
+              "base": geo.addLine(p_base, p_axis)}
+    surfaces: dict[str, list[int]] = {k: [] for k in curves}
+    for name, c in curves.items():
+        dimtags = [(1, c)]
+        for _ in range(4):
+            out = geo.revolve(dimtags, 0, 0, 0, 1, 0, 0, math.pi / 2)
+            surfaces[name] += [t for d, t in out if d == 2]
+            dimtags = [out[0]]
+    geo.synchronize()
+    for name, tags in surfaces.items():
+        gmsh.model.addPhysicalGroup(2, tags, BODY_TAGS[name])
+        gmsh.model.setPhysicalName(2, BODY_TAGS[name], name)
+    gmsh.option.setNumber("Mesh.MeshSizeMax", mesh_size)
+    gmsh.model.mesh.generate(2)
+
+
+def write_meshes(cfg: MissileConfig, out_dir: Path) -> dict[str, Path]:
+    """Write ``<fin name>.msh`` for every fin and ``body.msh`` into ``out_dir``.
+
+    Returns {fin name or "body": path}. The meshes follow ``cfg`` (element size ``cfg.mesh_size``).
+    """
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    missile = build_missile(cfg)
+    paths: dict[str, Path] = {}
+    for fin in missile.fins:
+        path = out_dir / f"{fin.name}.msh"
+        with gmsh_model(fin.name) as gmsh:
+            build_fin_model(gmsh, fin, cfg.mesh_size)
+            gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
+            gmsh.write(str(path))
+        paths[fin.name] = path
+    path = out_dir / "body.msh"
+    with gmsh_model("body") as gmsh:
+        build_body_model(gmsh, missile, cfg.mesh_size)
+        gmsh.write(str(path))
+    paths["body"] = path
+    return paths
+
+
+def read_msh_nodes_and_cells(path: Path, dim: int = 2):
+    """Node coordinates [m] (n, 3) and, per gmsh element type of dimension ``dim``, the
+    connectivity as 0-based node indices: (x, {element type name: (k, nodes per element)})."""
+    with gmsh_model("read") as gmsh:
+        gmsh.merge(str(path))
+        tags, x, _ = gmsh.model.mesh.getNodes()
+        order = np.argsort(tags)
+        index = np.empty(int(tags.max()) + 1, np.int64)
+        index[tags[order]] = np.arange(tags.size)
+        x = np.asarray(x).reshape(-1, 3)
+        cells = {}
+        types, _, conn = gmsh.model.mesh.getElements(dim)
+        for t, c in zip(types, conn):
+            name, _, _, nn, _, _ = gmsh.model.mesh.getElementProperties(t)
+            cells[name] = index[np.asarray(c, np.int64)].reshape(-1, nn)
+    return x, cells
+
+
+def load_fin_mesh(path: Path, comm):
+    """Load a fin ``.msh`` into dolfinx 0.5.2: (mesh, cell_tags, facet_tags), gdim = 3.
+
+    The file is read by gmsh on rank 0 of ``comm`` and distributed. Tags: :data:`PHYSICAL_TAGS`.
+    """
+    from dolfinx.io import gmshio
+
+    if comm.rank == 0:
+        with gmsh_model("load_fin_mesh") as gmsh:
+            gmsh.merge(str(path))
+            return gmshio.model_to_mesh(gmsh.model, comm, 0, gdim=3)
+    return gmshio.model_to_mesh(None, comm, 0, gdim=3)

@@ -1,0 +1,524 @@
+"""Contact geometry of the rigid missile, callable from numba ``@njit`` kernels.
+
+Everything is in the missile body frame B (:mod:`flexnet_fe.frames`: origin at the nose apex,
+``+x_b`` forward, body in ``x_b ∈ [-L, 0]``), SI units [m].
+
+Shapes (the same parameters as the Gmsh meshes of :mod:`flexnet_fe.missile.mesh`)
+    * part 0 ``body``: the cylinder of radius R from station L_n to L, closed by the flat base;
+    * part 1 ``nose``: cone, tangent ogive or hemisphere from the apex to station L_n;
+    * part 2+i: fin ``missile.fins[i]`` (wing_1..wing_4, rudder_1..rudder_4): a flat trapezoidal
+      plate of its real thickness h (a prism ``trapezoid × [-h/2, h/2]`` along the fin normal).
+      For contact the plate's root edge is extended into the body by δ = min(R/2, room on the
+      cylinder) along the leading/trailing-edge lines, so that the plate's root face (which is
+      glued to the body, not a free surface) is never reported as the nearest surface; outside
+      the body the union of shapes is unchanged.
+
+    Body and nose are one convex solid of revolution, described in the meridian half-plane
+    (s = -x_b, r = sqrt(y_b² + z_b²)) by a profile of segments and circular arcs; the 3-D
+    distance to a surface of revolution equals the 2-D distance to its profile in the point's meridian plane.
+
+Packed arrays (``pack_shapes(missile) -> ShapeArrays``, a NamedTuple; pass ``*shapes`` to the
+``@njit`` functions, in this order):
+    prof_kind  int64 (m,)      0 segment, 1 circular arc
+    prof_data  float64 (m, 6)  segment (s0, r0, s1, r1, 0, 0); arc (s_c, r_c, ρ, θ0, θ1, 0) [m, rad]
+    prof_part  int64 (m,)      part id of each profile piece (0 body, 1 nose)
+    fin_origin float64 (nf, 3) fin-frame origin (root leading edge on the body surface) [m]
+    fin_axes   float64 (nf, 3, 3) rows e1 (span, outward), e2 (chord, leading→trailing), n = e1×e2
+    fin_poly   float64 (nf, 4, 2) contact trapezoid in fin-plane coordinates (u, v) [m],
+               counter-clockwise: root TE, root LE, tip LE, tip TE; edge k joins corner k and k+1:
+               0 root (extended by δ into the body), 1 leading edge, 2 tip, 3 trailing edge
+    fin_half_thickness float64 (nf,) h/2 [m]
+    fin_part   int64 (nf,)     part id 2 + i
+    fin_bound  float64 (nf, 4) bounding sphere of each contact plate: centre (3,) [m], radius [m]
+               (lets the queries skip fins that cannot be nearest / cannot be touched)
+
+``@njit`` functions (usable inside other ``@njit`` code):
+
+``closest_point(p, *shapes) -> (d, normal, q, part)``
+    p [m] (3,) a point in B. d [m]: signed distance to the missile's surface (negative inside;
+    it is the minimum of the parts' own signed distances: outside all parts this is the exact
+    distance to their union; inside, it is the depth in the part the point is deepest in, exact
+    for a point inside one part only — e.g. a point inside the body within h/2 of a fin's plane
+    near its root reports that fin's face). normal (3,): unit outward normal at the closest point
+    (for a point off the surface, ±(p - q)/|p - q|, i.e. the direction that reduces the
+    penetration). q [m] (3,): the closest surface point. part: int part id (0 body, 1 nose,
+    2+i fin i). A point exactly on the axis gets its radial direction from +y_b (documented
+    choice; any is correct there).
+
+``segment_fin_contact(a, b, *shapes) -> (part, t, point, depth, normal)``
+    Whether the straight rope segment a–b ([m], (3,) each, in B) penetrates any fin plate, even if
+    both end points are outside it (a rope crossing a 4–6 mm fin edge between two sample points).
+    part: 2 + fin index of the deepest penetration, or -1 (then the other outputs are zeros).
+    t ∈ [0, 1]: segment parameter of the contact point ``point = a + t (b - a)`` [m] (3,).
+    depth [m] > 0 and normal (3,) unit: moving the segment by ``depth * normal`` frees it.
+      - If the segment crosses the fin's mid-plane inside the trapezoid (a rope draped over an
+        edge), point is that crossing, depth the in-plane distance from it to the nearest free
+        edge (leading edge, tip or trailing edge; never the root, which is attached to the body)
+        and normal that edge's outward in-plane normal: the rope must slide off over that edge.
+      - Otherwise (the segment dips into a face or corner without crossing the mid-plane) point
+        is the deepest point of the segment inside the plate, depth its distance to the nearest
+        face and normal that face's outward normal (exact: the plate's signed distance along a
+        line is the maximum of 6 affine functions, minimised exactly).
+
+Allocation-free variants for hot loops return the vectors as scalars:
+``closest_point_scalar(p, *shapes) -> (d, n_x, n_y, n_z, q_x, q_y, q_z, part)``,
+``body_closest_scalar(p, prof_kind, prof_data, prof_part) -> (d, n_x, n_y, n_z, q_x, q_y, q_z,
+part)``, ``fin_closest_scalar(p, fin_origin[i], ...) -> (d, n_x, n_y, n_z, q_x, q_y, q_z)``.
+
+The parts separately (same outputs, for kernels with their own broad phase):
+``body_closest_point(p, prof_kind, prof_data, prof_part) -> (d, normal, q, part)`` and
+``fin_closest_point(p, fin_origin[i], fin_axes[i], fin_poly[i], fin_half_thickness[i])
+-> (d, normal, q)``.
+
+Python wrappers for many points at once (tests, plots): ``closest_points(points, shapes)`` and
+``segment_fin_contacts(a, b, shapes)``.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit
+
+from flexnet_fe.missile.geometry import Missile
+
+PART_BODY = 0
+PART_NOSE = 1
+FIN_PART_OFFSET = 2
+NO_PART = -1  # segment_fin_contact: no fin touched
+
+
+class ShapeArrays(NamedTuple):
+    """Packed contact shapes of one missile (see the module docstring for fields and units)."""
+
+    prof_kind: np.ndarray
+    prof_data: np.ndarray
+    prof_part: np.ndarray
+    fin_origin: np.ndarray
+    fin_axes: np.ndarray
+    fin_poly: np.ndarray
+    fin_half_thickness: np.ndarray
+    fin_part: np.ndarray
+    fin_bound: np.ndarray
+
+
+def part_names(missile: Missile) -> list[str]:
+    """Names of the part ids: ``["body", "nose", fin names...]``."""
+    return ["body", "nose"] + [f.name for f in missile.fins]
+
+
+def _root_extension(missile: Missile, fin) -> float:
+    """Depth δ [m] by which the contact plate's root edge is extended into the body (≥ 0):
+    R/2, or less if the extended root would leave the cylinder [L_n, L]."""
+    le_station = -fin.origin[0]
+    uv = fin.uv
+    slope_le = (uv[2, 1] - uv[1, 1]) / fin.span  # dv/du of the leading edge
+    slope_te = (uv[3, 1] - uv[0, 1]) / fin.span
+    delta = 0.5 * missile.radius
+    # moving the root to u = -δ shifts the root LE station by -δ slope_le and the TE by -δ slope_te
+    if slope_le > 0:
+        delta = min(delta, (le_station - missile.nose_length) / slope_le)
+    te_station = le_station + uv[0, 1]
+    if slope_te < 0:
+        delta = min(delta, (missile.length - te_station) / -slope_te)
+    return max(delta, 0.0)
+
+
+def pack_shapes(missile: Missile) -> ShapeArrays:
+    """The contact shapes of ``missile`` as plain arrays for ``@njit`` code."""
+    m = len(missile.profile)
+    kind = np.empty(m, np.int64)
+    data = np.zeros((m, 6))
+    part = np.empty(m, np.int64)
+    for i, prim in enumerate(missile.profile):
+        kind[i] = int(prim.kind)
+        data[i, : len(prim.data)] = prim.data
+        part[i] = prim.part
+    nf = len(missile.fins)
+    origin = np.empty((nf, 3))
+    axes = np.empty((nf, 3, 3))
+    poly = np.empty((nf, 4, 2))
+    half = np.empty(nf)
+    fpart = np.empty(nf, np.int64)
+    bound = np.empty((nf, 4))
+    for i, fin in enumerate(missile.fins):
+        origin[i] = fin.origin
+        axes[i] = np.stack([fin.e1, fin.e2, fin.n])
+        uv = np.array(fin.uv)
+        delta = _root_extension(missile, fin)
+        for root_k, tip_k in ((0, 3), (1, 2)):  # root TE along the TE line, root LE along the LE
+            slope = (uv[tip_k, 1] - uv[root_k, 1]) / fin.span
+            uv[root_k] = (-delta, uv[root_k, 1] - delta * slope)
+        poly[i] = uv
+        half[i] = 0.5 * fin.thickness
+        fpart[i] = FIN_PART_OFFSET + i
+        corners = fin.origin + uv[:, :1] * fin.e1 + uv[:, 1:] * fin.e2
+        centre = corners.mean(axis=0)
+        bound[i, :3] = centre
+        bound[i, 3] = np.linalg.norm(corners - centre, axis=1).max() + half[i]
+    return ShapeArrays(kind, data, part, origin, axes, poly, half, fpart, bound)
+
+
+# ----------------------------------------------------------------------------- body of revolution
+
+
+@njit(cache=True)
+def _closest_on_segment_2d(ps, pr, s0, r0, s1, r1):
+    """Closest point (s, r) on the segment (s0, r0)–(s1, r1) to (ps, pr)."""
+    ds, dr = s1 - s0, r1 - r0
+    ll = ds * ds + dr * dr
+    t = ((ps - s0) * ds + (pr - r0) * dr) / ll
+    t = min(max(t, 0.0), 1.0)
+    return s0 + t * ds, r0 + t * dr
+
+
+@njit(cache=True)
+def _closest_on_arc_2d(ps, pr, sc, rc, rho, th0, th1):
+    """Closest point (s, r) on the arc of centre (sc, rc), radius rho, angles [th0, th1]."""
+    th = np.arctan2(pr - rc, ps - sc)
+    if th < 0.0:
+        th += 2.0 * np.pi
+    if th0 <= th <= th1 and (ps - sc) ** 2 + (pr - rc) ** 2 > 0.0:
+        return sc + rho * np.cos(th), rc + rho * np.sin(th)
+    s_a, r_a = sc + rho * np.cos(th0), rc + rho * np.sin(th0)
+    s_b, r_b = sc + rho * np.cos(th1), rc + rho * np.sin(th1)
+    if (ps - s_a) ** 2 + (pr - r_a) ** 2 <= (ps - s_b) ** 2 + (pr - r_b) ** 2:
+        return s_a, r_a
+    return s_b, r_b
+
+
+@njit(cache=True)
+def _profile_radius(s, prof_kind, prof_data):
+    """Body radius r(s) [m] at station s, or -1 where s is outside [0, L]."""
+    for i in range(prof_kind.shape[0]):
+        d = prof_data[i]
+        if prof_kind[i] == 0:
+            if d[2] > d[0] and d[0] <= s <= d[2]:
+                return d[1] + (s - d[0]) * (d[3] - d[1]) / (d[2] - d[0])
+        else:
+            s_lo = d[0] + d[2] * np.cos(d[4])  # apex end of the arc
+            s_hi = d[0] + d[2] * np.cos(d[3])
+            if s_lo <= s <= s_hi:
+                return d[1] + np.sqrt(max(d[2] * d[2] - (s - d[0]) ** 2, 0.0))
+    return -1.0
+
+
+@njit(cache=True)
+def _profile_normal_2d(i, qs, qr, prof_kind, prof_data):
+    """Outward unit normal (n_s, n_r) of profile piece i at its point (qs, qr)."""
+    d = prof_data[i]
+    if prof_kind[i] == 0:
+        ts, tr = d[2] - d[0], d[3] - d[1]
+        ln = np.sqrt(ts * ts + tr * tr)
+        return -tr / ln, ts / ln  # tangent (apex → base) rotated by +90°
+    return (qs - d[0]) / d[2], (qr - d[1]) / d[2]
+
+
+@njit(cache=True)
+def body_closest_scalar(p, prof_kind, prof_data, prof_part):
+    """Allocation-free :func:`body_closest_point`: (d, n_x, n_y, n_z, q_x, q_y, q_z, part)."""
+    s = -p[0]
+    r = np.sqrt(p[1] * p[1] + p[2] * p[2])
+    if r > 0.0:
+        ay, az = p[1] / r, p[2] / r
+    else:
+        ay, az = 1.0, 0.0  # on the axis: meridian plane through +y_b
+    best = np.inf
+    best_i = 0
+    bs, br = 0.0, 0.0
+    for i in range(prof_kind.shape[0]):
+        d = prof_data[i]
+        if prof_kind[i] == 0:
+            qs, qr = _closest_on_segment_2d(s, r, d[0], d[1], d[2], d[3])
+        else:
+            qs, qr = _closest_on_arc_2d(s, r, d[0], d[1], d[2], d[3], d[4])
+        dist2 = (s - qs) ** 2 + (r - qr) ** 2
+        if dist2 < best:
+            best, best_i, bs, br = dist2, i, qs, qr
+    dist = np.sqrt(best)
+    r_prof = _profile_radius(s, prof_kind, prof_data)
+    inside = r_prof >= 0.0 and r <= r_prof
+    if dist > 1e-12:
+        sign = -1.0 if inside else 1.0
+        ns, nr = sign * (s - bs) / dist, sign * (r - br) / dist
+    else:
+        ns, nr = _profile_normal_2d(best_i, bs, br, prof_kind, prof_data)
+    return ((-dist if inside else dist), -ns, nr * ay, nr * az, -bs, br * ay, br * az,
+            prof_part[best_i])
+
+
+@njit(cache=True)
+def body_closest_point(p, prof_kind, prof_data, prof_part):
+    """Signed distance [m], outward normal (3,), closest point (3,) [m] and part id (0 or 1) of
+    the body of revolution for a point p [m] (3,) in B (see the module docstring)."""
+    d, nx, ny, nz, qx, qy, qz, part = body_closest_scalar(p, prof_kind, prof_data, prof_part)
+    return d, np.array([nx, ny, nz]), np.array([qx, qy, qz]), part
+
+
+# ----------------------------------------------------------------------------- thin fin plates
+
+
+@njit(cache=True)
+def _edge_frame(poly, k):
+    """Start corner (2,) and outward unit normal (2,) of edge k of a counter-clockwise polygon."""
+    a = poly[k]
+    b = poly[(k + 1) % poly.shape[0]]
+    tu, tv = b[0] - a[0], b[1] - a[1]
+    ln = np.sqrt(tu * tu + tv * tv)
+    return a, tv / ln, -tu / ln
+
+
+@njit(cache=True)
+def fin_closest_scalar(p, origin, axes, poly, half):
+    """Allocation-free :func:`fin_closest_point`: (d, n_x, n_y, n_z, q_x, q_y, q_z) in B."""
+    d0, d1, d2_ = p[0] - origin[0], p[1] - origin[1], p[2] - origin[2]
+    u = d0 * axes[0, 0] + d1 * axes[0, 1] + d2_ * axes[0, 2]
+    v = d0 * axes[1, 0] + d1 * axes[1, 1] + d2_ * axes[1, 2]
+    w = d0 * axes[2, 0] + d1 * axes[2, 1] + d2_ * axes[2, 2]
+    # 2-D signed distance to the convex polygon: max of edge-line distances inside (exact),
+    # distance to the nearest edge segment outside.
+    nv_ = poly.shape[0]
+    d2_in = -np.inf
+    k_in = 0
+    nu_in, nv_in = 0.0, 0.0
+    d2_out = np.inf
+    qu_out, qv_out = u, v
+    for k in range(nv_):
+        au, av = poly[k, 0], poly[k, 1]
+        bu, bv = poly[(k + 1) % nv_, 0], poly[(k + 1) % nv_, 1]
+        tu, tv = bu - au, bv - av
+        ln = np.sqrt(tu * tu + tv * tv)
+        nu, nv = tv / ln, -tu / ln
+        dk = (u - au) * nu + (v - av) * nv
+        if dk > d2_in:
+            d2_in, k_in, nu_in, nv_in = dk, k, nu, nv
+        qu, qv = _closest_on_segment_2d(u, v, au, av, bu, bv)
+        dd = (u - qu) ** 2 + (v - qv) ** 2
+        if dd < d2_out:
+            d2_out, qu_out, qv_out = dd, qu, qv
+    inside2 = d2_in <= 0.0
+    dw = abs(w) - half
+    sw = 1.0 if w >= 0.0 else -1.0
+    if inside2 and dw <= 0.0:
+        if dw >= d2_in:  # nearest: a face (top or bottom)
+            qu_, qv_, qw_ = u, v, sw * half
+            nlu, nlv, nlw = 0.0, 0.0, sw
+            sd = dw
+        else:  # nearest: a side face (edge k_in)
+            qu_, qv_, qw_ = u - d2_in * nu_in, v - d2_in * nv_in, w
+            nlu, nlv, nlw = nu_in, nv_in, 0.0
+            sd = d2_in
+    else:
+        if inside2:
+            qu_out, qv_out = u, v
+        qu_, qv_, qw_ = qu_out, qv_out, min(max(w, -half), half)
+        nlu, nlv, nlw = u - qu_, v - qv_, w - qw_
+        sd = np.sqrt(nlu * nlu + nlv * nlv + nlw * nlw)
+        if sd > 0.0:
+            nlu, nlv, nlw = nlu / sd, nlv / sd, nlw / sd
+        elif dw >= d2_in:  # on the surface to round-off: the normal of the face it lies on
+            nlu, nlv, nlw = 0.0, 0.0, sw
+        else:
+            nlu, nlv, nlw = nu_in, nv_in, 0.0
+    qx = origin[0] + qu_ * axes[0, 0] + qv_ * axes[1, 0] + qw_ * axes[2, 0]
+    qy = origin[1] + qu_ * axes[0, 1] + qv_ * axes[1, 1] + qw_ * axes[2, 1]
+    qz = origin[2] + qu_ * axes[0, 2] + qv_ * axes[1, 2] + qw_ * axes[2, 2]
+    nx = nlu * axes[0, 0] + nlv * axes[1, 0] + nlw * axes[2, 0]
+    ny = nlu * axes[0, 1] + nlv * axes[1, 1] + nlw * axes[2, 1]
+    nz = nlu * axes[0, 2] + nlv * axes[1, 2] + nlw * axes[2, 2]
+    return sd, nx, ny, nz, qx, qy, qz
+
+
+@njit(cache=True)
+def fin_closest_point(p, origin, axes, poly, half):
+    """Signed distance [m], outward normal (3,), closest point (3,) [m] of one fin plate
+    (a convex prism: ``poly`` (4, 2) in the fin plane × [-half, half] along the normal)."""
+    sd, nx, ny, nz, qx, qy, qz = fin_closest_scalar(p, origin, axes, poly, half)
+    return sd, np.array([nx, ny, nz]), np.array([qx, qy, qz])
+
+
+# ----------------------------------------------------------------------------- whole missile
+
+
+@njit(cache=True)
+def closest_point_scalar(p, prof_kind, prof_data, prof_part, fin_origin, fin_axes, fin_poly,
+                         fin_half_thickness, fin_part, fin_bound):
+    """Allocation-free :func:`closest_point`: (d, n_x, n_y, n_z, q_x, q_y, q_z, part)."""
+    d, nx, ny, nz, qx, qy, qz, part = body_closest_scalar(p, prof_kind, prof_data, prof_part)
+    for i in range(fin_origin.shape[0]):
+        # |p - c| - r_bound is a lower bound of the plate's distance: skip plates that cannot win
+        dc = np.sqrt((p[0] - fin_bound[i, 0]) ** 2 + (p[1] - fin_bound[i, 1]) ** 2
+                     + (p[2] - fin_bound[i, 2]) ** 2)
+        if dc - fin_bound[i, 3] >= d:
+            continue
+        di, mx, my, mz, sx, sy, sz = fin_closest_scalar(p, fin_origin[i], fin_axes[i],
+                                                        fin_poly[i], fin_half_thickness[i])
+        if di < d:
+            d, nx, ny, nz, qx, qy, qz, part = di, mx, my, mz, sx, sy, sz, fin_part[i]
+    return d, nx, ny, nz, qx, qy, qz, part
+
+
+@njit(cache=True)
+def closest_point(p, prof_kind, prof_data, prof_part, fin_origin, fin_axes, fin_poly,
+                  fin_half_thickness, fin_part, fin_bound):
+    """(signed distance [m], outward normal (3,), closest surface point [m] (3,), part id) of the
+    whole missile for a point p [m] (3,) in B; the part with the smallest signed distance wins."""
+    d, nx, ny, nz, qx, qy, qz, part = closest_point_scalar(
+        p, prof_kind, prof_data, prof_part, fin_origin, fin_axes, fin_poly, fin_half_thickness,
+        fin_part, fin_bound)
+    return d, np.array([nx, ny, nz]), np.array([qx, qy, qz]), part
+
+
+@njit(cache=True)
+def _segment_one_fin(a, b, origin, axes, poly, half):
+    """(hit, t, depth, normal (3,)) of segment a–b against one fin plate (module docstring)."""
+    da, db = a - origin, b - origin
+    la = np.array([da @ axes[0], da @ axes[1], da @ axes[2]])
+    lb = np.array([db @ axes[0], db @ axes[1], db @ axes[2]])
+    dl = lb - la
+    # the 6 bounding planes as affine functions f_j(t) = f0[j] + f1[j] t (signed distances [m]);
+    # plane normals in fin coordinates (u, v, w) in nrm[j]
+    f0 = np.empty(6)
+    f1 = np.empty(6)
+    nrm = np.zeros((6, 3))
+    for k in range(4):
+        c, nu, nv = _edge_frame(poly, k)
+        f0[k] = (la[0] - c[0]) * nu + (la[1] - c[1]) * nv
+        f1[k] = dl[0] * nu + dl[1] * nv
+        nrm[k, 0], nrm[k, 1] = nu, nv
+    f0[4], f1[4], nrm[4, 2] = la[2] - half, dl[2], 1.0
+    f0[5], f1[5], nrm[5, 2] = -la[2] - half, -dl[2], -1.0
+    # clip [0, 1] to the prism {f_j(t) <= 0 for all j}
+    t_lo, t_hi = 0.0, 1.0
+    for j in range(6):
+        if f1[j] == 0.0:
+            if f0[j] > 0.0:
+                return False, 0.0, 0.0, np.zeros(3)
+        else:
+            tj = -f0[j] / f1[j]
+            if f1[j] > 0.0:
+                t_hi = min(t_hi, tj)
+            else:
+                t_lo = max(t_lo, tj)
+    if t_lo >= t_hi:
+        return False, 0.0, 0.0, np.zeros(3)
+    wa, wb = la[2], lb[2]
+    if wa != wb and (wa <= 0.0 <= wb or wb <= 0.0 <= wa):
+        tc = wa / (wa - wb)
+        if t_lo <= tc <= t_hi:  # crosses the mid-plane inside the plate: escape over an edge
+            best = np.inf
+            kb = 1
+            for k in range(1, 4):  # free edges only (not the root, k = 0)
+                fk = -(f0[k] + f1[k] * tc)
+                if fk < best:
+                    best, kb = fk, k
+            nl = nrm[kb]
+            return True, tc, best, nl[0] * axes[0] + nl[1] * axes[1] + nl[2] * axes[2]
+    # deepest point: minimise g(t) = max_j f_j(t) on [t_lo, t_hi]; g is convex piecewise affine,
+    # so its minimum is at an end or where two planes are equal.
+    best_g = np.inf
+    best_t = t_lo
+    for ic in range(2 + 15):
+        if ic == 0:
+            tt = t_lo
+        elif ic == 1:
+            tt = t_hi
+        else:
+            m = ic - 2  # pair index -> (i, j), i < j, of the 6 planes
+            i = 0
+            while m >= 5 - i:
+                m -= 5 - i
+                i += 1
+            j = i + 1 + m
+            den = f1[i] - f1[j]
+            if den == 0.0:
+                continue
+            tt = (f0[j] - f0[i]) / den
+            if tt < t_lo or tt > t_hi:
+                continue
+        g = -np.inf
+        for jj in range(6):
+            g = max(g, f0[jj] + f1[jj] * tt)
+        if g < best_g:
+            best_g, best_t = g, tt
+    jb = 0
+    gmax = -np.inf
+    for jj in range(6):
+        val = f0[jj] + f1[jj] * best_t
+        if val > gmax:
+            gmax, jb = val, jj
+    if best_g >= 0.0:
+        return False, 0.0, 0.0, np.zeros(3)
+    nl = nrm[jb]
+    return True, best_t, -best_g, nl[0] * axes[0] + nl[1] * axes[1] + nl[2] * axes[2]
+
+
+@njit(cache=True)
+def segment_fin_contact(a, b, prof_kind, prof_data, prof_part, fin_origin, fin_axes, fin_poly,
+                        fin_half_thickness, fin_part, fin_bound):
+    """(part id or -1, t [-], point [m] (3,), depth [m], normal (3,)) of the deepest fin
+    penetration of the rope segment a–b [m] (3,) in B (module docstring)."""
+    best_part = NO_PART
+    best_t = 0.0
+    best_depth = 0.0
+    best_n = np.zeros(3)
+    ab0, ab1, ab2 = b[0] - a[0], b[1] - a[1], b[2] - a[2]
+    ll = ab0 * ab0 + ab1 * ab1 + ab2 * ab2
+    for i in range(fin_origin.shape[0]):
+        # skip plates whose bounding sphere the segment does not reach
+        c0, c1, c2 = fin_bound[i, 0] - a[0], fin_bound[i, 1] - a[1], fin_bound[i, 2] - a[2]
+        tc = (c0 * ab0 + c1 * ab1 + c2 * ab2) / ll if ll > 0.0 else 0.0
+        tc = min(max(tc, 0.0), 1.0)
+        e0, e1, e2 = c0 - tc * ab0, c1 - tc * ab1, c2 - tc * ab2
+        if e0 * e0 + e1 * e1 + e2 * e2 > fin_bound[i, 3] ** 2:
+            continue
+        hit, t, depth, n = _segment_one_fin(a, b, fin_origin[i], fin_axes[i], fin_poly[i],
+                                            fin_half_thickness[i])
+        if hit and depth > best_depth:
+            best_part, best_t, best_depth, best_n = fin_part[i], t, depth, n
+    return best_part, best_t, a + best_t * (b - a), best_depth, best_n
+
+
+# ----------------------------------------------------------------------------- vectorised wrappers
+
+
+@njit(cache=True)
+def _closest_points_kernel(pts, prof_kind, prof_data, prof_part, fin_origin, fin_axes, fin_poly,
+                           fin_half_thickness, fin_part, fin_bound, d, nrm, q, part):
+    for k in range(pts.shape[0]):
+        dk, nk, qk, pk = closest_point(pts[k], prof_kind, prof_data, prof_part, fin_origin,
+                                       fin_axes, fin_poly, fin_half_thickness, fin_part, fin_bound)
+        d[k], nrm[k], q[k], part[k] = dk, nk, qk, pk
+
+
+def closest_points(points: np.ndarray, shapes: ShapeArrays):
+    """Vectorised :func:`closest_point`: points [m] (n, 3) in B -> signed distances [m] (n,),
+    normals (n, 3), closest points [m] (n, 3), part ids (n,) int64."""
+    pts = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 3)
+    n = pts.shape[0]
+    d, nrm, q, part = np.empty(n), np.empty((n, 3)), np.empty((n, 3)), np.empty(n, np.int64)
+    _closest_points_kernel(pts, *shapes, d, nrm, q, part)
+    return d, nrm, q, part
+
+
+@njit(cache=True)
+def _segment_kernel(a, b, prof_kind, prof_data, prof_part, fin_origin, fin_axes, fin_poly,
+                    fin_half_thickness, fin_part, fin_bound, part, t, point, depth, nrm):
+    for k in range(a.shape[0]):
+        pk, tk, xk, dk, nk = segment_fin_contact(a[k], b[k], prof_kind, prof_data, prof_part,
+                                                 fin_origin, fin_axes, fin_poly,
+                                                 fin_half_thickness, fin_part, fin_bound)
+        part[k], t[k], point[k], depth[k], nrm[k] = pk, tk, xk, dk, nk
+
+
+def segment_fin_contacts(a: np.ndarray, b: np.ndarray, shapes: ShapeArrays):
+    """Vectorised :func:`segment_fin_contact`: segment ends a, b [m] (n, 3) in B -> part ids (n,)
+    int64 (-1 = no contact), t (n,), points [m] (n, 3), depths [m] (n,), normals (n, 3)."""
+    a = np.ascontiguousarray(a, dtype=np.float64).reshape(-1, 3)
+    b = np.ascontiguousarray(b, dtype=np.float64).reshape(-1, 3)
+    n = a.shape[0]
+    part, t, point = np.empty(n, np.int64), np.empty(n), np.empty((n, 3))
+    depth, nrm = np.empty(n), np.empty((n, 3))
+    _segment_kernel(a, b, *shapes, part, t, point, depth, nrm)
+    return part, t, point, depth, nrm
