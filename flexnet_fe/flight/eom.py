@@ -1,0 +1,38 @@
+"""Rigid-body equations of motion (flat, non-rotating Earth; body axes; diagonal inertia).
+
+    ṙ = v,    v̇ = R(q) f_B + g,    q̇ = ½ q ⊗ (0, ω),    I ω̇ = M − ω × (I ω)
+
+(e.g. Stevens, Lewis & Johnson, *Aircraft Control and Simulation*, 3rd ed., §1.8; Euler's
+equations of a rigid body). q = (w, x, y, z) rotates body vectors into the flight frame.
+The translational part is two lines in ``flexnet_fe.flight.simulate.derivative``; the rotational
+laws below are shared with the tests against NASA's check case.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from flexnet_fe.rigid import quat_mul
+
+
+@njit(cache=True)
+def euler_rates(omega, inertia, moment):
+    """ω̇ [rad/s²], shape (3,), from Euler's equations for principal inertia ``inertia``
+    (I_xx, I_yy, I_zz) [kg m²] and body moment [N m]."""
+    p, q, r = omega[0], omega[1], omega[2]
+    ix, iy, iz = inertia[0], inertia[1], inertia[2]
+    out = np.empty(3)
+    out[0] = (moment[0] - (iz - iy) * q * r) / ix
+    out[1] = (moment[1] - (ix - iz) * r * p) / iy
+    out[2] = (moment[2] - (iy - ix) * p * q) / iz
+    return out
+
+
+@njit(cache=True)
+def quat_rate(q, omega):
+    """q̇ = ½ q ⊗ (0, ω), shape (4,) (ω: body rate [rad/s])."""
+    w = np.empty(4)
+    w[0] = 0.0
+    w[1:] = omega
+    return 0.5 * quat_mul(q, w)
