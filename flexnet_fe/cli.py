@@ -82,6 +82,36 @@ def cmd_mesh(args) -> int:
     return 0
 
 
+def cmd_sweep(args) -> int:
+    from flexnet_fe.config import load_case
+    from flexnet_fe.sweep import parse_axis, run_many, sweep_points
+
+    case, _ = load_case(args.case, args.set)  # fail early on a bad base case
+    axes = [parse_axis(a) for a in args.vary]
+    points = sweep_points(axes)
+    out = Path(args.out) if args.out else Path("runs") / f"{case.case.name}-sweep"
+    jobs = [("_".join(o.split("=", 1)[1] for o in pt).replace("/", "-"), Path(args.case), args.set + pt)
+            for pt in points]
+    rows = run_many(jobs, out, out / "sweep.csv")
+    failed = [r for r in rows if r["error"]]
+    print(f"{len(rows) - len(failed)}/{len(rows)} points done → {out / 'sweep.csv'}")
+    return 1 if failed else 0
+
+
+def cmd_batch(args) -> int:
+    from flexnet_fe.sweep import run_many
+
+    cases = sorted(Path(args.folder).glob("*/case.toml"))
+    if not cases:
+        from flexnet_fe.errors import CaseError
+        raise CaseError(args.folder, "", "no */case.toml below this folder")
+    out = Path(args.out) if args.out else Path("runs")
+    rows = run_many([(c.parent.name, c, list(args.set)) for c in cases], out, out / "batch.csv")
+    failed = [r for r in rows if r["error"]]
+    print(f"{len(rows) - len(failed)}/{len(rows)} cases done → {out / 'batch.csv'}")
+    return 1 if failed else 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="flexnet", description=__doc__.splitlines()[0])
     p.add_argument("-v", "--verbose", action="store_true", help="debug logging")
@@ -106,6 +136,20 @@ def build_parser() -> argparse.ArgumentParser:
     add_case(sp)
     sp.add_argument("--out", help="output folder (default meshes/<missile name>)")
     sp.set_defaults(func=cmd_mesh)
+
+    sp = sub.add_parser("sweep", help="run a case over a grid of parameter values; one CSV table")
+    add_case(sp)
+    sp.add_argument("--vary", action="append", required=True, metavar="KEY=V1,V2,...",
+                    help="a swept field and its values (repeatable: the grid is their product)")
+    sp.add_argument("--out", help="output folder (default runs/<case name>-sweep)")
+    sp.set_defaults(func=cmd_sweep)
+
+    sp = sub.add_parser("batch", help="run every cases/*/case.toml below a folder; one CSV table")
+    sp.add_argument("folder", help="folder holding case directories")
+    sp.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                    help="override applied to every case (repeatable)")
+    sp.add_argument("--out", help="output folder (default runs/)")
+    sp.set_defaults(func=cmd_batch)
     return p
 
 

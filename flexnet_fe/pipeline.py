@@ -33,7 +33,7 @@ LOG = logging.getLogger("flexnet")
 # Which earlier stage's outputs a stage reads (when the case asks for it).
 def _needs(case: Case, stage: Stage) -> tuple[Stage, ...]:
     if stage is Stage.collide:
-        return (Stage.deploy,) if case.collide.net_state.value == "deploy" else ()
+        return (Stage.deploy,) if case.collide.net_source.value == "deploy_max_area" else ()
     if stage is Stage.shell:
         return (Stage.collide,)
     if stage is Stage.flight:

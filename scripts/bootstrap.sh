@@ -7,7 +7,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 APT_PACKAGES=(python3-dolfinx-real python3-gmsh python3-venv python3-dev libegl1 libegl-mesa0
-              libgl1-mesa-dri openmpi-bin)
+              libgl1-mesa-dri openmpi-bin python3-h5py)
 missing=()
 for p in "${APT_PACKAGES[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

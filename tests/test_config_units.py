@@ -1,0 +1,27 @@
+"""Case-file plumbing that does not depend on any physics section."""
+
+from __future__ import annotations
+
+import pytest
+
+from flexnet_fe.config import apply_overrides, parse_override
+from flexnet_fe.errors import CaseError
+
+
+def test_override_values_are_toml():
+    assert parse_override("net.rope_diameter=4e-3") == (["net", "rope_diameter"], 4e-3)
+    assert parse_override("deploy.air=false") == (["deploy", "air"], False)
+    assert parse_override("missile.preset=radar") == (["missile", "preset"], "radar")
+    assert parse_override("case.stages=['deploy']") == (["case", "stages"], ["deploy"])
+
+
+def test_override_applies_without_touching_input():
+    data = {"net": {"kind": "traction"}}
+    out = apply_overrides(data, ["net.rope_diameter=1e-3", "deploy.duration=0.5"])
+    assert out == {"net": {"kind": "traction", "rope_diameter": 1e-3}, "deploy": {"duration": 0.5}}
+    assert data == {"net": {"kind": "traction"}}
+
+
+def test_override_needs_equals():
+    with pytest.raises(CaseError, match="key=value"):
+        parse_override("net.rope_diameter")
