@@ -1,0 +1,238 @@
+"""The deploy stage: open a traction or rotary net in the air (paper §III, §V-B).
+
+``run_deploy`` builds the net, chooses the time step from physics, advances the compiled
+kernel one output interval per call, and writes into ``stage_dir``:
+
+- ``history.csv``: one row per output time (float64, units in the column names);
+- ``snapshots/net_*.vtu`` + ``net.pvd``: the net as a line mesh (ParaView / PyVista);
+- ``deploy.png``: plots like the paper's Fig. 7 (traction) or Fig. 9 (rotary);
+- ``shapes.png``: the net at eight instants, like the paper's Fig. 6 / Fig. 8;
+- ``net_state.npz`` (allow_pickle=False): the state at maximum area (``t``, ``x``, ``v``,
+  ``hub``, ``wrap``) plus the topology arrays, for the collision stage.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+
+from flexnet_fe.atmosphere import Air
+from flexnet_fe.errors import NumericalError
+from flexnet_fe.io import write_history_csv
+from flexnet_fe.net.area import loop_area, raster_area
+from flexnet_fe.net.config import DeployConfig, RotaryNet, TractionNet
+from flexnet_fe.net.plots import plot_history, plot_shapes
+from flexnet_fe.net.snapshots import write_pvd, write_vtu
+from flexnet_fe.net.state import (Environment, NetState, energies, evaluate_tensions, initial_state,
+                                  step_many)
+from flexnet_fe.net.timestep import choose_time_step, drag_limit
+from flexnet_fe.net.topology import NetModel, build_rotary, build_traction
+from flexnet_fe.progress import progress_bar
+
+
+def build_net(net: TractionNet | RotaryNet) -> NetModel:
+    """The NetModel of a ``[net]`` section."""
+    if isinstance(net, TractionNet):
+        return build_traction(net)
+    if isinstance(net, RotaryNet):
+        return build_rotary(net)
+    raise TypeError(f"unknown net section {type(net).__name__}")
+
+
+def net_area(model: NetModel, x: np.ndarray, pixel: float) -> float:
+    """Net area [m^2] (``flexnet_fe.net.area``): union of the cells projected on x–y."""
+    return float(raster_area(np.ascontiguousarray(x[:, :2]), model.cells, pixel))
+
+
+def area_peaks(area: np.ndarray) -> np.ndarray:
+    """Indices of the maxima of the area history whose prominence exceeds 5 % of its range."""
+    from scipy.signal import find_peaks
+
+    rng = float(area.max() - area.min())
+    if rng <= 0.0:
+        return np.zeros(0, dtype=int)
+    return find_peaks(area, prominence=0.05 * rng)[0]
+
+
+def find_period(t: np.ndarray, area: np.ndarray) -> float | None:
+    """Open/contract period [s]: time between the first two maxima of the area whose
+    prominence exceeds 5 % of the area's range; None if fewer than two are simulated."""
+    peaks = area_peaks(area)
+    return float(t[peaks[1]] - t[peaks[0]]) if len(peaks) >= 2 else None
+
+
+def hub_nodes_inside(model: NetModel, state: NetState) -> np.ndarray:
+    """Warps whose first node is inside the hub cylinder (projected within the rim and within
+    H/2 of the hub plane), shape (k,) int. Net–hub contact is not modelled: such a node passes
+    through the hub, and its link keeps its wound angle while inside (``hub.wrap_geometry``)."""
+    j = model.springs[model.hub_link, 1]
+    d = state.x[j] - state.x[model.hub_node]
+    inside = (np.hypot(d[:, 0], d[:, 1]) <= model.hub_radius) & (np.abs(d[:, 2]) <= 0.5 * model.hub_length)
+    return np.flatnonzero(inside)
+
+
+def run_deploy(net: TractionNet | RotaryNet, deploy: DeployConfig, air: Air, stage_dir: Path,
+               log: logging.Logger) -> dict:
+    """Simulate the deployment and write its outputs; returns the ``deploy`` summary section
+    (SI units): max_area_m2, time_to_max_area_s, initial_area_m2, period_s, max_tension_n,
+    steps, dt_s, wall_s, plus the first opening's maximum (``first_max_area_m2`` at
+    ``time_to_first_max_area_s``), dt limits, snapshot and state file names, air state.
+    ``max_area_m2`` is the largest area over the whole simulated time; ``net_state.npz`` holds
+    the state at that instant."""
+    wall0 = time.perf_counter()
+    stage_dir = Path(stage_dir)
+    snap_dir = stage_dir / "snapshots"
+    snap_dir.mkdir(parents=True, exist_ok=True)
+    for old in snap_dir.glob("net_*.vtu"):  # a re-run replaces the previous series
+        old.unlink()
+
+    model = build_net(net)
+    speed = deploy.mach * air.speed_of_sound
+    state = initial_state(model, (0.0, 0.0, speed))
+    rho = air.density if deploy.air else 0.0
+    env = Environment(gravity=np.array([0.0, -air.gravity if deploy.gravity else 0.0, 0.0]),
+                      rho=rho, wind=np.zeros(3), air=deploy.air)
+    ts = choose_time_step(model, state.x, state.v, rho, deploy.safety_factor, deploy.time_step)
+    n_out = int(round(deploy.duration / deploy.output_interval))
+    snap_every = max(1, int(round(deploy.snapshot_interval / deploy.output_interval)))
+    log.info("net %s: %d nodes, %d segments, net mass %.4g kg", model.kind, model.n_nodes,
+             model.n_springs, float(model.mass.sum()))
+    log.info("air %s (rho = %.4g kg/m^3 at %.0f m), gravity %s, flight speed %.1f m/s (Mach %.2f)",
+             "on" if deploy.air else "off", air.density, air.altitude, "on" if deploy.gravity else "off",
+             speed, deploy.mach)
+    log.info("time step at t = 0: %.4g s (%s; spring limit %.4g s, drag limit %.4g s, safety %.2f); "
+             "re-derived from the drag limit of the current state every output interval %.4g s",
+             ts.dt, "forced" if ts.forced else "from physics", ts.spring_limit, ts.drag_limit,
+             deploy.safety_factor, deploy.output_interval)
+
+    cols = {k: np.zeros(n_out + 1) for k in (
+        "t_s", "area_m2", "area_loop_m2", "mass_speed_rel_mps", "mass_speed_mps", "max_tension_n",
+        "mass_rope_tension_n",
+        "peak_tension_interval_n", "hub_spin_radps", "hub_wrap_max_rad", "com_speed_z_mps",
+        "kinetic_energy_rel_j", "elastic_energy_j", "dt_s", "dt_drag_limit_s", "drag_number")}
+    snaps: list[tuple[float, str]] = []
+    # segments that end on a corner / tip mass (the ropes pulling the masses back)
+    at_mass = np.isin(model.springs, model.mass_nodes).any(axis=1)
+    shape_ks = set(np.linspace(0, n_out, 8).round().astype(int).tolist())
+    shapes: list[tuple[float, np.ndarray]] = []
+    best = {"area": -1.0}
+
+    def record(k: int, peak: float) -> None:
+        evaluate_tensions(model, state, env)  # at this row's state (the kernel's are a step old)
+        x, v = state.x, state.v
+        mtot = model.mass.sum()
+        vcom = (model.mass[:, None] * v).sum(axis=0) / mtot
+        mv = v[model.mass_nodes]
+        cols["t_s"][k] = state.t
+        area = net_area(model, x, deploy.area_pixel)
+        cols["area_m2"][k] = area
+        cols["area_loop_m2"][k] = loop_area(x[:, :2], model.boundary_loop)
+        cols["mass_speed_rel_mps"][k] = float(np.linalg.norm(mv - vcom, axis=1).mean())
+        cols["mass_speed_mps"][k] = float(np.linalg.norm(mv, axis=1).mean())
+        cols["max_tension_n"][k] = float(state.tension.max())
+        cols["mass_rope_tension_n"][k] = float(state.tension[at_mass].mean())
+        cols["peak_tension_interval_n"][k] = peak
+        cols["hub_spin_radps"][k] = state.hub[1] if model.hub_node >= 0 else 0.0
+        cols["hub_wrap_max_rad"][k] = float(np.abs(state.wrap).max())
+        cols["com_speed_z_mps"][k] = vcom[2]
+        e = energies(model, state)
+        cols["kinetic_energy_rel_j"][k] = e["kinetic"] - 0.5 * mtot * float(vcom @ vcom)  # about the CoM
+        cols["elastic_energy_j"][k] = e["elastic"]
+        cols["dt_drag_limit_s"][k] = drag_limit(model, x, v, rho)
+        if k in shape_ks:
+            shapes.append((state.t, x[:, :2].copy()))
+        if area > best["area"]:
+            best.update(area=area, t=state.t, x=x.copy(), v=v.copy(), hub=state.hub.copy(),
+                        wrap=state.wrap.copy())
+        if k % snap_every == 0:
+            name = f"net_{k // snap_every:05d}.vtu"
+            write_vtu(snap_dir / name, x, v, model.springs, state.tension)
+            snaps.append((state.t, f"snapshots/{name}"))
+
+    cols["dt_s"][0] = ts.dt
+    record(0, 0.0)
+    steps = 0
+    warned_inside = False
+    with progress_bar(n_out, f"deploy {model.kind}") as bar:
+        for k in range(1, n_out + 1):
+            # the spring limit is fixed (linear ropes); the drag limit follows the state
+            lim = min(ts.spring_limit, cols["dt_drag_limit_s"][k - 1])
+            if ts.forced:
+                if ts.dt > lim:
+                    raise NumericalError(
+                        f"forced time step dt = {ts.dt:.4g} s exceeds the stability limit "
+                        f"{lim:.4g} s at t = {state.t:.4g} s (springs {ts.spring_limit:.4g} s, drag "
+                        f"{cols['dt_drag_limit_s'][k - 1]:.4g} s)")
+                sub = int(math.ceil(deploy.output_interval / ts.dt - 1e-9))
+            else:
+                sub = int(math.ceil(deploy.output_interval / (deploy.safety_factor * lim)))
+            dt = deploy.output_interval / sub  # outputs fall on steps; dt <= safety × limit
+            peak, drag_number = step_many(model, state, env, dt, sub, lim)
+            steps += sub
+            state.t = k * deploy.output_interval  # remove round-off drift of the summed steps
+            if drag_number > 2.0:
+                raise NumericalError(
+                    f"drag time scale fell below the time step during t <= {state.t:.4g} s: "
+                    f"λ·dt = {drag_number:.3g} > 2 with dt = {dt:.4g} s (lower safety_factor)")
+            if model.hub_node >= 0 and not warned_inside:
+                inside = hub_nodes_inside(model, state)
+                if len(inside):
+                    warned_inside = True
+                    log.warning("t = %.4g s: the first node of warp(s) %s is inside the hub (net-hub "
+                                "contact is not modelled; reported once)", state.t, inside.tolist())
+            cols["dt_s"][k] = dt
+            cols["drag_number"][k] = drag_number
+            record(k, peak)
+            bar.update(1)
+
+    write_history_csv(stage_dir / "history.csv", cols)
+    write_pvd(stage_dir / "net.pvd", snaps)
+    np.savez(stage_dir / "net_state.npz", kind=np.array(model.kind), t=best["t"], x=best["x"],
+             v=best["v"], hub=best["hub"], wrap=best["wrap"], mass=model.mass, springs=model.springs,
+             rest_length=model.rest_length, stiffness_ea=model.stiffness_ea,
+             damping=model.damping, slack_offset=model.slack_offset, diameter=model.diameter,
+             drag_free=model.drag_free, mass_nodes=model.mass_nodes, cells=model.cells,
+             hub_link=model.hub_link, anchor_angle=model.anchor_angle,
+             hub_node=model.hub_node, hub_radius=model.hub_radius, hub_length=model.hub_length,
+             hub_inertia=model.hub_inertia)
+    title = (f"{model.kind} net deployment — air {'on' if deploy.air else 'off'}, "
+             f"Mach {deploy.mach:g} at {air.altitude:.0f} m, d = {net.rope_diameter * 1e3:g} mm (world frame W)")
+    plot_history(stage_dir / "deploy.png", cols, model.kind, title)
+    plot_shapes(stage_dir / "shapes.png", shapes, model.springs,
+                f"{model.kind} net, projection on the world x–y plane (normal to the flight direction)")
+
+    i_max = int(np.argmax(cols["area_m2"]))
+    peaks = area_peaks(cols["area_m2"])
+    i_first = int(peaks[0]) if len(peaks) else i_max
+    summary = {
+        "max_area_m2": float(cols["area_m2"][i_max]),
+        "time_to_max_area_s": float(cols["t_s"][i_max]),
+        "first_max_area_m2": float(cols["area_m2"][i_first]),
+        "time_to_first_max_area_s": float(cols["t_s"][i_first]),
+        "initial_area_m2": float(cols["area_m2"][0]),
+        "period_s": find_period(cols["t_s"], cols["area_m2"]),
+        "max_tension_n": float(cols["peak_tension_interval_n"].max()),
+        "steps": steps,
+        "dt_s": float(cols["dt_s"][1:].min()),
+        "dt_max_s": float(cols["dt_s"][1:].max()),
+        "dt_spring_limit_s": ts.spring_limit,
+        "dt_drag_limit_min_s": (float(cols["dt_drag_limit_s"].min()) if deploy.air else None),
+        "nodes": model.n_nodes,
+        "segments": model.n_springs,
+        "net_mass_kg": float(model.mass.sum()),
+        "area_pixel_m": deploy.area_pixel,
+        "air": {"on": deploy.air, "altitude_m": air.altitude, "density_kgpm3": air.density,
+                "speed_of_sound_mps": air.speed_of_sound, "flight_speed_mps": speed,
+                "gravity_mps2": air.gravity if deploy.gravity else 0.0},
+        "snapshots": "net.pvd",
+        "state_at_max_area": "net_state.npz",
+    }
+    summary["wall_s"] = time.perf_counter() - wall0
+    log.info("max area %.2f m^2 at t = %.3f s (initial %.2f m^2), period %s s, max tension %.4g N, %.1f s wall",
+             summary["max_area_m2"], summary["time_to_max_area_s"], summary["initial_area_m2"],
+             summary["period_s"], summary["max_tension_n"], summary["wall_s"])
+    return summary

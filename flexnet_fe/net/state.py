@@ -1,0 +1,131 @@
+"""Net state (what changes), the loads environment, and stepping a model in compiled chunks."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+
+from flexnet_fe.errors import NumericalError
+from flexnet_fe.net.hub import wrap_geometry
+from flexnet_fe.net.kernels import advance, net_forces
+from flexnet_fe.net.topology import NetModel
+
+
+@dataclass
+class NetState:
+    """t [s]; x, v (n, 3) [m], [m/s]; hub = (θ [rad], ω [rad/s]) (2,); wrap (m,) wound angle of
+    each hub link [rad]; tension (m,) [N] at the last force evaluation."""
+
+    t: float
+    x: np.ndarray
+    v: np.ndarray
+    hub: np.ndarray
+    wrap: np.ndarray
+    tension: np.ndarray
+
+
+@dataclass(frozen=True)
+class Environment:
+    """gravity (3,) [m/s^2]; rho air density [kg/m^3]; wind (3,) [m/s] (air velocity in W);
+    air: aerodynamic loads on/off."""
+
+    gravity: np.ndarray
+    rho: float
+    wind: np.ndarray
+    air: bool
+
+
+def initial_state(model: NetModel, flight_velocity=(0.0, 0.0, 0.0)) -> NetState:
+    """The model's t = 0 state, every node also moving with ``flight_velocity`` (3,) [m/s]."""
+    return NetState(0.0, model.x0.copy(), model.v0 + np.asarray(flight_velocity, dtype=float),
+                    np.array([0.0, model.hub_spin0]), np.zeros(model.n_springs), np.zeros(model.n_springs))
+
+
+def step_many(model: NetModel, state: NetState, env: Environment, dt: float, n_steps: int,
+              dt_limit: float = math.nan) -> tuple[float, float]:
+    """Advance ``state`` in place by ``n_steps`` × ``dt`` [s] in one compiled call.
+
+    Returns (largest rope tension [N] seen, largest drag stability number λ dt seen; must stay
+    <= 2). Raises NumericalError if the state is no longer finite, naming dt and ``dt_limit``
+    (the stability limit it was chosen against) and the drag number."""
+    f = np.empty_like(state.x)
+    lam = np.empty(len(state.x))
+    peak, drag_number = advance(state.x, state.v, state.hub, state.wrap, int(n_steps), float(dt), model.springs,
+                   model.rest_length, model.stiffness, model.damping, model.slack_offset,
+                   model.diameter, model.hub_link, model.anchor_angle, model.mass, model.hub_node,
+                   model.hub_radius, 0.5 * model.hub_length,
+                   model.hub_inertia if model.hub_node >= 0 else 1.0,
+                   np.asarray(env.gravity, dtype=float), float(env.rho),
+                   np.asarray(env.wind, dtype=float), bool(env.air), f, state.tension, lam)
+    state.t += n_steps * dt
+    if not (np.isfinite(state.x).all() and np.isfinite(state.v).all() and np.isfinite(state.hub).all()):
+        raise NumericalError(
+            f"net state became non-finite by t = {state.t:.6g} s: dt = {dt:.4g} s against a "
+            f"stability limit dt_crit = {dt_limit:.4g} s (drag stability number λ·dt = {drag_number:.3g}, limit 2)")
+    return float(peak), float(drag_number)
+
+
+def evaluate_tensions(model: NetModel, state: NetState, env: Environment) -> None:
+    """Fill ``state.tension`` [N] from the current state without advancing it."""
+    f = np.empty_like(state.x)
+    net_forces(state.x, state.v, state.hub, state.wrap.copy(), model.springs, model.rest_length,
+               model.stiffness, model.damping, model.slack_offset, model.diameter, model.hub_link,
+               model.anchor_angle, model.mass, model.hub_node, model.hub_radius, 0.5 * model.hub_length,
+               np.asarray(env.gravity, dtype=float), float(env.rho), np.asarray(env.wind, dtype=float),
+               bool(env.air), f, state.tension, np.zeros(len(state.x)))
+
+
+@njit(cache=True)
+def _lengths(x, springs, hub_link, anchor, hub, r0, half_length, theta, wrap):
+    m = springs.shape[0]
+    out = np.empty(m)
+    for s in range(m):
+        j = springs[s, 1]
+        if hub_link[s]:
+            if abs(x[j, 2] - x[hub, 2]) > half_length:
+                gamma, w = theta + anchor[s], 0.0
+            else:
+                gamma, w = wrap_geometry(x[j, 0] - x[hub, 0], x[j, 1] - x[hub, 1], theta + anchor[s], r0, wrap[s])
+            d0 = x[j, 0] - x[hub, 0] - r0 * math.cos(gamma)
+            d1 = x[j, 1] - x[hub, 1] - r0 * math.sin(gamma)
+            d2 = x[j, 2] - x[hub, 2]
+            out[s] = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2) + r0 * abs(w)
+        else:
+            i = springs[s, 0]
+            d0 = x[j, 0] - x[i, 0]; d1 = x[j, 1] - x[i, 1]; d2 = x[j, 2] - x[i, 2]
+            out[s] = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+    return out
+
+
+def segment_lengths(model: NetModel, state: NetState) -> np.ndarray:
+    """Current length of each segment [m], shape (m,) (hub links: free part + wound part)."""
+    return _lengths(state.x, model.springs, model.hub_link, model.anchor_angle, model.hub_node,
+                    model.hub_radius, 0.5 * model.hub_length, state.hub[0], state.wrap)
+
+
+def energies(model: NetModel, state: NetState, gravity=(0.0, 0.0, 0.0)) -> dict[str, float]:
+    """kinetic (translation + hub spin), elastic and gravitational potential energy [J]."""
+    ke = 0.5 * float(np.sum(model.mass * np.sum(state.v**2, axis=1)))
+    if model.hub_node >= 0:
+        ke += 0.5 * model.hub_inertia * state.hub[1] ** 2
+    l = segment_lengths(model, state)
+    stretch = l - (model.rest_length - model.slack_offset)
+    pe = float(np.sum(0.5 * model.stiffness * np.where(stretch > 0, stretch, 0.0) ** 2))
+    pg = -float(np.sum(model.mass * (state.x @ np.asarray(gravity, dtype=float))))
+    return {"kinetic": ke, "elastic": pe, "gravity": pg}
+
+
+def momentum(model: NetModel, state: NetState) -> np.ndarray:
+    """Linear momentum Σ m v [kg m/s], shape (3,)."""
+    return (model.mass[:, None] * state.v).sum(axis=0)
+
+
+def spin_angular_momentum(model: NetModel, state: NetState) -> float:
+    """Angular momentum about the +z axis through the origin [kg m^2/s], hub spin included."""
+    lz = float(np.sum(model.mass * (state.x[:, 0] * state.v[:, 1] - state.x[:, 1] * state.v[:, 0])))
+    if model.hub_node >= 0:
+        lz += model.hub_inertia * state.hub[1]
+    return lz

@@ -1,0 +1,306 @@
+"""Net models (what never changes during a deployment) and their builders.
+
+Frame: world frame W of ``flexnet_fe.frames`` — the net lies flat in the x–y plane at t = 0,
+centred on the origin, flight along +z, +y up. Each rope segment is one tension-only
+spring-damper between two lumped masses (paper §III-A, Eq. (1)–(4)); each node carries half
+the mass of every segment it ends (plus any concentrated mass: corner, tip, hub).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from flexnet_fe.net.config import RotaryNet, TractionNet, WarpInitialState
+
+
+@dataclass(frozen=True)
+class NetModel:
+    """A lumped-mass rope net. n nodes, m segments (springs).
+
+    Attributes
+    ----------
+    kind : "traction" or "rotary".
+    x0 : initial positions [m], shape (n, 3).
+    v0 : initial velocities relative to the launching interceptor [m/s], shape (n, 3);
+         the deploy stage adds the uniform flight velocity.
+    mass : lumped node masses [kg], shape (n,).
+    springs : node pairs (i, j) of each segment, shape (m, 2), int64.
+    rest_length : unstretched segment lengths l0 [m], shape (m,).
+    stiffness_ea : axial rigidity E·A [N], shape (m,); K = EA / l0, Eq. (3).
+    damping : dashpot coefficients c [N s/m], shape (m,); Eq. (4), see :func:`segment_damping`.
+    slack_offset : LINK167 offset [m], shape (m,); the segment is taut when its length exceeds
+         ``rest_length - slack_offset`` (> 0 pretension, < 0 slack).
+    diameter : rope diameter d [m], shape (m,) (aerodynamic size, Eq. (5)–(6)).
+    drag_free : shape (n,), bool; True where the node carries a concentrated body (corner mass,
+         tip mass, hub) whose own aerodynamic load is not modelled (the paper has no law for it).
+         Rope-segment loads still act on these nodes.
+    mass_nodes : indices of the corner (traction) or tip (rotary) masses, shape (k,), int64.
+    cells : triangles covering the net surface, shape (c, 3), int64 (area definition).
+    boundary_loop : ordered nodes of the outer perimeter, shape (b,), int64.
+    hub_node : index of the hub's centre node (rotary) or -1.
+    hub_link : shape (m,), bool; True for the segments that join a warp to the hub rim.
+         For those, ``springs[s, 0] == hub_node`` and the rope starts on the rim at
+         ``anchor_angle[s]`` (hub frame, from +x at θ = 0), Eq. (12)–(19).
+    anchor_angle : [rad], shape (m,); 0 where not a hub link.
+    hub_radius : r0 [m]; hub_length : axial length H [m]; hub_inertia : J [kg m^2];
+    hub_spin0 : initial ω about +z [rad/s].
+    """
+
+    kind: str
+    x0: np.ndarray
+    v0: np.ndarray
+    mass: np.ndarray
+    springs: np.ndarray
+    rest_length: np.ndarray
+    stiffness_ea: np.ndarray
+    damping: np.ndarray
+    slack_offset: np.ndarray
+    diameter: np.ndarray
+    drag_free: np.ndarray
+    mass_nodes: np.ndarray
+    cells: np.ndarray
+    boundary_loop: np.ndarray
+    hub_node: int = -1
+    hub_link: np.ndarray | None = None
+    anchor_angle: np.ndarray | None = None
+    hub_radius: float = 0.0
+    hub_length: float = 0.0
+    hub_inertia: float = 0.0
+    hub_spin0: float = 0.0
+
+    def __post_init__(self):
+        m = len(self.springs)
+        if self.hub_link is None:
+            object.__setattr__(self, "hub_link", np.zeros(m, dtype=np.bool_))
+        if self.anchor_angle is None:
+            object.__setattr__(self, "anchor_angle", np.zeros(m))
+        for name in ("x0", "v0", "mass", "springs", "rest_length", "stiffness_ea", "damping",
+                     "slack_offset", "diameter", "drag_free", "mass_nodes", "cells",
+                     "boundary_loop", "hub_link", "anchor_angle"):
+            getattr(self, name).setflags(write=False)
+
+    @property
+    def n_nodes(self) -> int:
+        return len(self.mass)
+
+    @property
+    def n_springs(self) -> int:
+        return len(self.springs)
+
+    @property
+    def stiffness(self) -> np.ndarray:
+        """Segment stiffness K = EA / l0 [N/m], shape (m,), Eq. (3)."""
+        return self.stiffness_ea / self.rest_length
+
+
+def segment_damping(stiffness: np.ndarray, m_i: np.ndarray, m_j: np.ndarray, zeta: float) -> np.ndarray:
+    """Dashpot coefficient c = 2 ζ √(μ K) [N s/m], Eq. (4), shape like ``stiffness``.
+
+    Departure from the paper: Eq. (4) writes the segment mass m_ij; we use the reduced mass
+    μ = m_i m_j / (m_i + m_j) of the two end nodes, so that ζ is exactly the damping ratio of
+    the segment's own axial mode (a two-mass oscillator) — the verification test checks this.
+    """
+    mu = m_i * m_j / (m_i + m_j)
+    return 2.0 * zeta * np.sqrt(mu * stiffness)
+
+
+def _lump(n: int, springs: np.ndarray, seg_mass: np.ndarray) -> np.ndarray:
+    mass = np.zeros(n)
+    np.add.at(mass, springs[:, 0], 0.5 * seg_mass)
+    np.add.at(mass, springs[:, 1], 0.5 * seg_mass)
+    return mass
+
+
+def build_traction(cfg: TractionNet) -> NetModel:
+    """Square traction net (paper §V-A): N × N knots, N = edge/mesh + 1, each mesh bar split
+    into ``cfg.subdivisions`` segments; four corner masses launched outwards.
+
+    Launch velocity of the corner at (sx, sy) = (±1, ±1):
+    V (cos e · (sx cos a, sy sin a), sin e) with a = ``launch_azimuth_deg`` from the x edge,
+    e = ``launch_elevation_deg`` towards +z.
+    """
+    nk = int(round(cfg.edge_length / cfg.mesh_size)) + 1
+    if abs((nk - 1) * cfg.mesh_size - cfg.edge_length) > 1e-9 * cfg.edge_length:
+        raise ValueError(f"edge_length {cfg.edge_length} m is not a multiple of mesh_size {cfg.mesh_size} m")
+    k = cfg.subdivisions
+    h = cfg.mesh_size
+    coords = -0.5 * cfg.edge_length + h * np.arange(nk)
+    X, Y = np.meshgrid(coords, coords)  # knot (row i = y index, col j = x index)
+    knots = np.column_stack([X.ravel(), Y.ravel(), np.zeros(nk * nk)])
+    kid = np.arange(nk * nk).reshape(nk, nk)
+
+    pts = [knots]
+    springs = []
+    nxt = nk * nk
+    bar_nodes = {}  # (a, b) knot pair -> list of node ids from a to b
+
+    def add_bar(a, b):
+        nonlocal nxt
+        chain = [a]
+        if k > 1:
+            s = np.arange(1, k)[:, None] / k
+            pts.append(knots[a] + s * (knots[b] - knots[a]))
+            chain += list(range(nxt, nxt + k - 1))
+            nxt += k - 1
+        chain.append(b)
+        springs.extend(zip(chain[:-1], chain[1:]))
+        bar_nodes[(a, b)] = chain
+
+    for i in range(nk):
+        for j in range(nk - 1):
+            add_bar(kid[i, j], kid[i, j + 1])
+    for i in range(nk - 1):
+        for j in range(nk):
+            add_bar(kid[i, j], kid[i + 1, j])
+    x0 = np.vstack(pts)
+    springs = np.asarray(springs, dtype=np.int64)
+    n = len(x0)
+
+    rest = np.linalg.norm(x0[springs[:, 1]] - x0[springs[:, 0]], axis=1)
+    area = 0.25 * np.pi * cfg.rope_diameter**2
+    seg_mass = cfg.density * area * rest
+    mass = _lump(n, springs, seg_mass)
+    corners = np.array([kid[0, 0], kid[0, -1], kid[-1, -1], kid[-1, 0]], dtype=np.int64)
+    mass[corners] += cfg.corner_mass
+    ea = np.full(len(springs), cfg.youngs_modulus * area)
+    # ζ is the damping ratio of a whole mesh bar (k = 1); a bar split into k segments keeps the
+    # same material viscosity (dashpots in series: c_segment = k c_bar), so refinement converges
+    damping = k * segment_damping(ea / rest, mass[springs[:, 0]], mass[springs[:, 1]], cfg.damping_ratio)
+
+    v0 = np.zeros((n, 3))
+    a, e = np.radians(cfg.launch_azimuth_deg), np.radians(cfg.launch_elevation_deg)
+    for c in corners:
+        sx, sy = np.sign(x0[c, 0]), np.sign(x0[c, 1])
+        v0[c] = cfg.corner_speed * np.array([np.cos(e) * sx * np.cos(a), np.cos(e) * sy * np.sin(a), np.sin(e)])
+
+    # cells: each mesh square is the polygon of its (subdivided) edges, fanned from a corner
+    tris = []
+    for i in range(nk - 1):
+        for j in range(nk - 1):
+            ring = (bar_nodes[(kid[i, j], kid[i, j + 1])][:-1]
+                    + bar_nodes[(kid[i, j + 1], kid[i + 1, j + 1])][:-1]
+                    + bar_nodes[(kid[i + 1, j], kid[i + 1, j + 1])][::-1][:-1]
+                    + bar_nodes[(kid[i, j], kid[i + 1, j])][::-1][:-1])
+            tris.extend((ring[0], ring[q], ring[q + 1]) for q in range(1, len(ring) - 1))
+    loop = (sum((bar_nodes[(kid[0, j], kid[0, j + 1])][:-1] for j in range(nk - 1)), [])
+            + sum((bar_nodes[(kid[i, -1], kid[i + 1, -1])][:-1] for i in range(nk - 1)), [])
+            + sum((bar_nodes[(kid[-1, j], kid[-1, j + 1])][::-1][:-1] for j in reversed(range(nk - 1))), [])
+            + sum((bar_nodes[(kid[i, 0], kid[i + 1, 0])][::-1][:-1] for i in reversed(range(nk - 1))), []))
+    drag_free = np.zeros(n, dtype=np.bool_)
+    drag_free[corners] = True
+    return NetModel(
+        kind="traction", x0=x0, v0=v0, mass=mass, springs=springs, rest_length=rest,
+        stiffness_ea=ea, damping=damping, slack_offset=np.full(len(springs), cfg.slack_offset / k),
+        diameter=np.full(len(springs), cfg.rope_diameter), drag_free=drag_free,
+        mass_nodes=corners, cells=np.asarray(tris, dtype=np.int64),
+        boundary_loop=np.asarray(loop, dtype=np.int64))
+
+
+def build_rotary(cfg: RotaryNet) -> NetModel:
+    """Rotary net (paper §III-B, §V-A): hub node 0 at the origin; warp w has knots at radii
+    r0 + i h (i = 1..M, M = warp_length / h) along angle 2π w / n; wefts join knot i of
+    adjacent warps (straight chords, initially unstretched); tip mass at i = M. Each bar (radial
+    or weft) is split into ``cfg.subdivisions`` segments.
+
+    The segment from the rim to the first node of each warp is a *hub link*: it starts on the
+    rim (anchor angle 2π w / n) and may wind onto the hub (Eq. (17)–(19), ``flexnet_fe.net.hub``).
+    """
+    nw, h, r0, k = cfg.warps, cfg.mesh_size, cfg.hub_radius, cfg.subdivisions
+    M = int(round(cfg.warp_length / h))
+    if abs(M * h - cfg.warp_length) > 1e-9 * cfg.warp_length:
+        raise ValueError(f"warp_length {cfg.warp_length} m is not a multiple of mesh_size {h} m")
+    ang = 2 * np.pi * np.arange(nw) / nw
+    r = r0 + h * np.arange(1, M + 1)
+    nid = 1 + np.arange(nw)[:, None] * M + np.arange(M)[None, :]  # knot (warp, ring)
+    nk = 1 + nw * M
+    knots = np.zeros((nk, 3))
+    knots[nid, 0] = r[None, :] * np.cos(ang)[:, None]
+    knots[nid, 1] = r[None, :] * np.sin(ang)[:, None]
+
+    pts = [knots]
+    springs, hub_link, anchor = [], [], []
+    nxt = nk
+
+    def chain(p_a, p_b, a, b):
+        """Nodes of a bar from point p_a (node a, or None for the rim) to node b."""
+        nonlocal nxt
+        ids = [a]
+        if k > 1:
+            s_ = np.arange(1, k)[:, None] / k
+            pts.append(p_a + s_ * (p_b - p_a))
+            ids += list(range(nxt, nxt + k - 1))
+            nxt += k - 1
+        return ids + [b]
+
+    warp_bars, weft_bars = {}, {}
+    for w in range(nw):
+        rim = r0 * np.array([np.cos(ang[w]), np.sin(ang[w]), 0.0])
+        ids = chain(rim, knots[nid[w, 0]], 0, nid[w, 0])
+        warp_bars[(w, -1)] = ids
+        for q, (i, j) in enumerate(zip(ids[:-1], ids[1:])):
+            springs.append((i, j)); hub_link.append(q == 0); anchor.append(ang[w] if q == 0 else 0.0)
+        for i in range(M - 1):
+            ids = chain(knots[nid[w, i]], knots[nid[w, i + 1]], nid[w, i], nid[w, i + 1])
+            warp_bars[(w, i)] = ids
+            for a_, b_ in zip(ids[:-1], ids[1:]):
+                springs.append((a_, b_)); hub_link.append(False); anchor.append(0.0)
+    for w in range(nw):
+        u = (w + 1) % nw
+        for i in range(M):
+            ids = chain(knots[nid[w, i]], knots[nid[u, i]], nid[w, i], nid[u, i])
+            weft_bars[(w, i)] = ids
+            for a_, b_ in zip(ids[:-1], ids[1:]):
+                springs.append((a_, b_)); hub_link.append(False); anchor.append(0.0)
+    x0 = np.vstack(pts)
+    n = len(x0)
+    springs = np.asarray(springs, dtype=np.int64)
+    hub_link = np.asarray(hub_link, dtype=np.bool_)
+    anchor = np.asarray(anchor)
+
+    # rest length: hub links run from the rim to their first node; others node to node
+    rest = np.linalg.norm(x0[springs[:, 1]] - x0[springs[:, 0]], axis=1)
+    rest[hub_link] = h / k
+    area = 0.25 * np.pi * cfg.rope_diameter**2
+    seg_mass = cfg.density * area * rest
+    mass = _lump(n, springs, seg_mass)
+    mass[0] += cfg.hub_mass
+    tips = nid[:, -1].astype(np.int64)
+    mass[tips] += cfg.tip_mass
+    ea = np.full(len(springs), cfg.youngs_modulus * area)
+    # ζ per whole bar; subdivided bars keep the material viscosity (see build_traction)
+    damping = k * segment_damping(ea / rest, mass[springs[:, 0]], mass[springs[:, 1]], cfg.damping_ratio)
+
+    v0 = np.zeros((n, 3))
+    if cfg.warp_initial_state is WarpInitialState.RIGID_ROTATION:
+        v0[:, 0] = -cfg.hub_spin * x0[:, 1]
+        v0[:, 1] = cfg.hub_spin * x0[:, 0]
+    elif cfg.warp_initial_state is not WarpInitialState.REST:
+        raise ValueError(f"unknown warp_initial_state {cfg.warp_initial_state!r}")
+    v0[0] = 0.0
+    v0[tips, 0] = -cfg.tip_speed * np.sin(ang)
+    v0[tips, 1] = cfg.tip_speed * np.cos(ang)
+
+    tris = []
+    for w in range(nw):
+        u = (w + 1) % nw
+        ring = warp_bars[(w, -1)][:-1] + weft_bars[(w, 0)][:-1] + warp_bars[(u, -1)][::-1][:-1]
+        tris.extend((ring[0], ring[q], ring[q + 1]) for q in range(1, len(ring) - 1))
+        for i in range(M - 1):
+            ring = (warp_bars[(w, i)][:-1] + weft_bars[(w, i + 1)][:-1]
+                    + warp_bars[(u, i)][::-1][:-1] + weft_bars[(w, i)][::-1][:-1])
+            tris.extend((ring[0], ring[q], ring[q + 1]) for q in range(1, len(ring) - 1))
+    loop = sum((weft_bars[(w, M - 1)][:-1] for w in range(nw)), [])
+    drag_free = np.zeros(n, dtype=np.bool_)
+    drag_free[tips] = True
+    drag_free[0] = True
+    J = cfg.hub_inertia if cfg.hub_inertia is not None else 0.5 * cfg.hub_mass * r0**2
+    return NetModel(
+        kind="rotary", x0=x0, v0=v0, mass=mass, springs=springs, rest_length=rest,
+        stiffness_ea=ea, damping=damping, slack_offset=np.full(len(springs), cfg.slack_offset / k),
+        diameter=np.full(len(springs), cfg.rope_diameter), drag_free=drag_free,
+        mass_nodes=tips, cells=np.asarray(tris, dtype=np.int64),
+        boundary_loop=np.asarray(loop, dtype=np.int64), hub_node=0, hub_link=hub_link,
+        anchor_angle=anchor, hub_radius=r0, hub_length=cfg.hub_length, hub_inertia=J,
+        hub_spin0=cfg.hub_spin)
