@@ -112,6 +112,17 @@ def cmd_batch(args) -> int:
     return 1 if failed else 0
 
 
+def cmd_report(args) -> int:
+    from flexnet_fe.report import build_report, build_sweep_report
+
+    if args.sweep:
+        path = build_sweep_report(Path(args.target), args.param or None)
+    else:
+        path = build_report(Path(args.target))
+    print(f"report: {path}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="flexnet", description=__doc__.splitlines()[0])
     p.add_argument("-v", "--verbose", action="store_true", help="debug logging")
@@ -150,6 +161,12 @@ def build_parser() -> argparse.ArgumentParser:
                     help="override applied to every case (repeatable)")
     sp.add_argument("--out", help="output folder (default runs/)")
     sp.set_defaults(func=cmd_batch)
+
+    sp = sub.add_parser("report", help="write report.html for a run directory (or a sweep/batch table)")
+    sp.add_argument("target", help="run directory, or with --sweep a sweep.csv / batch.csv")
+    sp.add_argument("--sweep", action="store_true", help="TARGET is a sweep or batch table")
+    sp.add_argument("--param", action="append", metavar="KEY", help="swept parameter columns (default: detected)")
+    sp.set_defaults(func=cmd_report)
     return p
 
 
