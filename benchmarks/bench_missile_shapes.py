@@ -1,6 +1,6 @@
 """Missile contact shapes and meshes: ns per query inside one @njit loop, compared in one run.
 
-Run: .venv/bin/python benchmarks/missile_shapes.py  (prints one line per measurement)
+Run: .venv/bin/python benchmarks/bench_missile_shapes.py  (prints one line per measurement)
 """
 import tempfile
 import time

@@ -57,6 +57,9 @@ def cmd_run(args) -> int:
     out = Path(args.out) if args.out else Path("runs") / case.case.name
     summary = run_case(case, case_dir, out, stages)
     print(f"{case.case.name}: done → {out}")
+    if args.report:
+        from flexnet_fe.report import build_report
+        print(f"  report: {build_report(out)}")
     for stage, section in summary.items():
         keys = [k for k in section if not isinstance(section[k], (dict, list))][:6]
         print(f"  {stage}: " + ", ".join(f"{k}={_fmt(section[k])}" for k in keys))
@@ -141,6 +144,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_case(sp)
     sp.add_argument("--out", help="run directory (default runs/<case name>)")
     sp.add_argument("--stages", help="comma-separated stages to run (default: the case's [case].stages)")
+    sp.add_argument("--report", action="store_true", help="also write report.html into the run directory")
     sp.set_defaults(func=cmd_run)
 
     sp = sub.add_parser("mesh", help="build the missile's fin and body meshes with Gmsh")

@@ -36,10 +36,10 @@ class Stage(str, Enum):
 
 STAGE_ORDER = tuple(Stage)
 
-# The tables each stage needs (besides [case] and [atmosphere]).
+# The tables each stage needs (besides [case], [atmosphere] and [deploy], which have defaults).
 STAGE_SECTIONS: dict[Stage, tuple[str, ...]] = {
-    Stage.deploy: ("net", "deploy"),
-    Stage.collide: ("net", "deploy", "missile", "collide"),
+    Stage.deploy: ("net",),
+    Stage.collide: ("net", "missile", "collide"),
     Stage.shell: ("missile", "collide", "shell"),
     Stage.flight: ("flight",),
 }
@@ -67,7 +67,7 @@ class Case(Section):
     case: CaseMeta
     atmosphere: AtmosphereConfig = AtmosphereConfig()
     net: NetConfig | None = None
-    deploy: DeployConfig | None = None
+    deploy: DeployConfig = DeployConfig()
     missile: MissileConfig | None = None
     collide: CollideConfig | None = None
     shell: ShellConfig | None = None
@@ -77,7 +77,7 @@ class Case(Section):
     def _stages_have_their_tables(self) -> "Case":
         for stage in self.case.stages:
             for table in STAGE_SECTIONS[stage]:
-                if getattr(self, table) is None and table != "deploy":
+                if getattr(self, table) is None:
                     raise ValueError(f"stage '{stage.value}' needs a [{table}] table")
         return self
 

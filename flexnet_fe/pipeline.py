@@ -23,8 +23,8 @@ from pathlib import Path
 from typing import Callable
 
 from flexnet_fe import __version__
-from flexnet_fe.config import STAGE_ORDER, Case, Stage, case_hash, resolved_dict
-from flexnet_fe.errors import FlexnetError
+from flexnet_fe.config import STAGE_ORDER, STAGE_SECTIONS, Case, Stage, case_hash, resolved_dict
+from flexnet_fe.errors import CaseError, FlexnetError
 from flexnet_fe.io import atomic_write_json, read_json
 from flexnet_fe.runs import StageContext
 
@@ -96,6 +96,10 @@ def run_case(case: Case, case_dir: Path, run_dir: Path, stages: list[Stage] | No
 
     funcs = stage_funcs or STAGE_FUNCS
     wanted = sorted(set(stages or case.case.stages), key=STAGE_ORDER.index)
+    for stage in wanted:
+        missing = [t for t in STAGE_SECTIONS[stage] if getattr(case, t) is None]
+        if missing:
+            raise CaseError("--stages", stage.value, f"the case has no [{missing[0]}] table, which this stage needs")
     run_dir = Path(run_dir)
     run_dir.mkdir(parents=True, exist_ok=True)
     digest = case_hash(case)

@@ -76,7 +76,8 @@ def test_failed_stage_is_recorded(tmp_path):
     from flexnet_fe.config import Stage, load_case
     from flexnet_fe.pipeline import run_case
 
-    case, case_dir = load_case(ROOT / "cases/traction_deploy")
+    # The traction case plus a default [flight] table, so two stages can run (both stubbed here).
+    case, case_dir = load_case(ROOT / "cases/traction_deploy", ["flight.lethal_radius=5.0"])
     calls = []
 
     def ok(ctx):
@@ -87,13 +88,13 @@ def test_failed_stage_is_recorded(tmp_path):
     def boom(ctx):
         raise RuntimeError("synthetic failure")
 
-    funcs = {Stage.deploy: ok, Stage.collide: boom}
+    funcs = {Stage.deploy: ok, Stage.flight: boom}
     with pytest.raises(RuntimeError):
-        run_case(case, case_dir, tmp_path, [Stage.deploy, Stage.collide], stage_funcs=funcs)
+        run_case(case, case_dir, tmp_path, [Stage.deploy, Stage.flight], stage_funcs=funcs)
     status = json.loads((tmp_path / "status.json").read_text())
     assert status["stages"]["deploy"]["state"] == "done"
-    assert status["stages"]["collide"] == {**status["stages"]["collide"], "state": "failed",
-                                           "error": "synthetic failure"}
+    assert status["stages"]["flight"] == {**status["stages"]["flight"], "state": "failed",
+                                          "error": "synthetic failure"}
     summary = json.loads((tmp_path / "summary.json").read_text())
     assert summary == {"deploy": {"value": 1.0}}
     assert (tmp_path / "deploy" / "history.csv").is_file()
@@ -101,4 +102,10 @@ def test_failed_stage_is_recorded(tmp_path):
     (tmp_path / "deploy" / "stale.txt").write_text("old")
     run_case(case, case_dir, tmp_path, [Stage.deploy], stage_funcs=funcs)
     assert not (tmp_path / "deploy" / "stale.txt").exists()
-    assert json.loads((tmp_path / "status.json").read_text())["stages"]["collide"]["state"] == "failed"
+    assert json.loads((tmp_path / "status.json").read_text())["stages"]["flight"]["state"] == "failed"
+
+
+def test_stage_without_its_table_is_refused(tmp_path):
+    r = run_cli("run", ROOT / "cases/traction_deploy", "--out", tmp_path / "r", "--stages", "deploy,collide")
+    assert r.returncode == 2 and "--stages" in r.stderr and "[missile]" in r.stderr, r.stderr
+    assert not (tmp_path / "r").exists()
