@@ -1,0 +1,270 @@
+"""Contact loads → consistent nodal forces on a fin's shell mesh (issue 4, used by the shell stage).
+
+A rope of diameter ``width`` pressing on a fin loads an area of that size, not a point. Each
+contact force F acting at point p is spread uniformly over a stencil of radius w/2 around p in
+the fin plane, and each stencil point x_q (weight ω_q, Σ ω_q = 1) gives consistent nodal forces
+f_i = ω_q N_i(x_q) F (N_i the bilinear shape functions). Because Σ_i N_i = 1 and
+Σ_i N_i x_i = x (isoparametric), the total force is F and the total moment about any point is
+(Σ_q ω_q x_q) × F = p × F exactly whenever the stencil's centroid is p (all stencils below are
+symmetric about p). Spreading over the rope width keeps the peak stress finite as the mesh is
+refined (a true point force gives a logarithmically unbounded bending stress).
+
+Stencil choice (departure from the paper, which does not describe its load transfer):
+1. a disk of radius w/2 (3 equal-area rings × 8 points) when all its points lie on the fin;
+2. else (contact at or near an edge) a segment of length w through p parallel to the nearest fin
+   edge — a rope across an edge touches it over about its width;
+3. else (a corner) that segment halved until it fits; a point load at p as the last resort.
+The component of p normal to the plane is dropped (mid-surface loading). A point outside the
+planform by at most ``plane_tol`` (a rope on the edge face, round-off) is moved to the nearest
+edge point (moment change ≤ plane_tol·|F|); farther from the plane or the fin is an error.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from dolfinx import geometry
+from dolfinx.mesh import exterior_facet_indices
+from mpi4py import MPI
+from scipy import sparse
+
+from flexnet_fe.shell.forms import NDOF_NODE  # (u_x, u_y, u_z, θ_1, θ_2); forces load the first 3
+
+
+_NR, _NPHI = 3, 8
+_RING_R = np.sqrt((np.arange(_NR) + 0.5) / _NR)  # equal-area ring radii (unit disk)
+_PHI = 2.0 * np.pi * (np.arange(_NPHI) + 0.5) / _NPHI
+DISK = np.concatenate([np.column_stack([r * np.cos(_PHI), r * np.sin(_PHI)]) for r in _RING_R])
+"""unit-disk stencil, shape (24, 2), equal weights, centroid 0"""
+_GL = np.polynomial.legendre.leggauss(6)
+LINE = _GL[0]
+"""unit segment [-1, 1] stencil (6 Gauss points), weights ``_GL[1] / 2``"""
+
+
+@dataclass(frozen=True)
+class FinGeometry:
+    """What the transfer needs from a fin's shell model."""
+
+    mesh: object
+    """dolfinx Mesh (quadrilaterals, gdim 3)"""
+    V: object
+    """shell function space, block size 5"""
+    origin: np.ndarray
+    e1: np.ndarray
+    e2: np.ndarray
+    n: np.ndarray
+
+
+def _shape_q1(xi: np.ndarray, eta: np.ndarray) -> np.ndarray:
+    """Bilinear shape functions on [0,1]² in dolfinx/basix vertex order
+    (0,0), (1,0), (0,1), (1,1); returns shape (len(xi), 4)."""
+    return np.column_stack([(1 - xi) * (1 - eta), xi * (1 - eta), (1 - xi) * eta, xi * eta])
+
+
+def _pull_back(xc: np.ndarray, y: np.ndarray, iters: int = 12) -> np.ndarray:
+    """Reference coordinates (ξ, η) of 2-D points ``y`` (m, 2) in bilinear cells with 2-D vertex
+    coordinates ``xc`` (m, 4, 2) by Newton's method. Returns (m, 2)."""
+    X = np.full((len(y), 2), 0.5)
+    for _ in range(iters):
+        xi, eta = X[:, 0], X[:, 1]
+        N = _shape_q1(xi, eta)
+        r = np.einsum("mi,mij->mj", N, xc) - y
+        dxi = np.column_stack([-(1 - eta), 1 - eta, -eta, eta])
+        deta = np.column_stack([-(1 - xi), -xi, 1 - xi, xi])
+        J = np.stack([np.einsum("mi,mij->mj", dxi, xc), np.einsum("mi,mij->mj", deta, xc)], axis=2)
+        X -= np.linalg.solve(J, r[:, :, None])[:, :, 0]
+    return X
+
+
+def _locate(fg: FinGeometry, pts3: np.ndarray, tol: float = 1e-9):
+    """Owned cell and reference coordinates of in-plane points ``pts3`` (m, 3).
+
+    Returns (cell, X, mine, found): cell index (−1 where this rank does not claim the point),
+    reference coordinates (m, 2), whether this rank claims the point, and whether any rank found
+    it. Each point is claimed by exactly one rank (the lowest owning a containing cell)."""
+    mesh = fg.mesh
+    comm = mesh.comm
+    n_owned = mesh.topology.index_map(2).size_local
+    tree = geometry.BoundingBoxTree(mesh, 2, np.arange(n_owned, dtype=np.int32), padding=1e-9)
+    cand = geometry.compute_collisions(tree, np.ascontiguousarray(pts3, dtype=np.float64))
+    xg = mesh.geometry.x
+    cg = mesh.geometry.dofmap.array.reshape(-1, 4)
+    m = len(pts3)
+    cell = np.full(m, -1, dtype=np.int32)
+    X = np.zeros((m, 2))
+    off = cand.offsets
+    counts = np.diff(off)
+    pi = np.repeat(np.arange(m), counts)
+    ci = cand.array
+    if len(ci):
+        rel = xg[cg[ci]] - fg.origin
+        xc = np.stack([rel @ fg.e1, rel @ fg.e2], axis=2)
+        y = pts3[pi] - fg.origin
+        y2 = np.column_stack([y @ fg.e1, y @ fg.e2])
+        Xc = _pull_back(xc, y2)
+        ok = np.all((Xc >= -tol) & (Xc <= 1 + tol), axis=1)
+        # first containing candidate per point
+        for k in np.flatnonzero(ok)[::-1]:
+            cell[pi[k]] = ci[k]
+            X[pi[k]] = np.clip(Xc[k], 0.0, 1.0)
+    here = cell >= 0
+    rank_claim = np.where(here, comm.rank, comm.size)
+    owner = np.empty_like(rank_claim)
+    comm.Allreduce(rank_claim, owner, op=MPI.MIN)
+    mine = here & (owner == comm.rank)
+    cell[~mine] = -1
+    return cell, X, mine, owner < comm.size
+
+
+def _boundary_segments(fg: FinGeometry) -> np.ndarray:
+    """All boundary edges of the fin as 2-D segments in (e1, e2), shape (nb, 2, 2), same on
+    every rank."""
+    mesh = fg.mesh
+    mesh.topology.create_connectivity(1, 2)
+    mesh.topology.create_connectivity(1, 0)
+    facets = exterior_facet_indices(mesh.topology)
+    facets = facets[facets < mesh.topology.index_map(1).size_local]
+    f2v = mesh.topology.connectivity(1, 0)
+    vx = mesh.geometry.x
+    # vertex → geometry node (P1 geometry: via the cell maps)
+    c2v = mesh.topology.connectivity(2, 0).array.reshape(-1, 4)
+    cg = mesh.geometry.dofmap.array.reshape(-1, 4)
+    v2g = np.empty(c2v.max() + 1 if len(c2v) else 0, dtype=np.int64)
+    v2g[c2v.ravel()] = cg.ravel()
+    segs = np.array([[vx[v2g[v]] for v in f2v.links(f)] for f in facets]).reshape(-1, 2, 3)
+    segs = np.concatenate(mesh.comm.allgather(segs))
+    rel = segs - fg.origin
+    return np.stack([rel @ fg.e1, rel @ fg.e2], axis=2)
+
+
+def _nearest_on_boundary(segs: np.ndarray, y2: np.ndarray):
+    """For each 2-D point of y2 (m, 2): the nearest point on the fin boundary (m, 2), its
+    distance (m,) [m] and the unit direction of that boundary segment (m, 2)."""
+    a, b = segs[:, 0], segs[:, 1]
+    d = b - a
+    L2 = np.maximum((d * d).sum(1), 1e-300)
+    near, dist, tdir = np.zeros((len(y2), 2)), np.zeros(len(y2)), np.zeros((len(y2), 2))
+    for i in range(0, len(y2), 2048):
+        y = y2[i:i + 2048, None, :]
+        s = np.clip(((y - a) * d).sum(2) / L2, 0.0, 1.0)
+        q = a + s[..., None] * d
+        d2 = ((q - y) ** 2).sum(2)
+        k = d2.argmin(1)
+        rows = np.arange(len(k))
+        near[i:i + 2048] = q[rows, k]
+        dist[i:i + 2048] = np.sqrt(d2[rows, k])
+        tdir[i:i + 2048] = d[k] / np.sqrt(L2[k])[:, None]
+    return near, dist, tdir
+
+
+def contact_transfer(fg: FinGeometry, points: np.ndarray, widths: np.ndarray, *,
+                     plane_tol: float) -> sparse.csr_matrix:
+    """Transfer matrix G, shape (n_owned·5, 3·ne): nodal forces of the owned DOFs = G @ F with
+    F = forces.ravel() (ne × 3, body frame B [N]) for contact points ``points`` [m] (ne, 3) in B
+    and rope widths ``widths`` [m] (ne,). Rotational DOFs get no load (forces act on the
+    mid-surface). Raises ValueError for a point off the fin plane or outside the fin."""
+    comm = fg.mesh.comm
+    points = np.asarray(points, dtype=float).reshape(-1, 3)
+    widths = np.asarray(widths, dtype=float).ravel()
+    ne = len(points)
+    rel = points - fg.origin
+    off = rel @ fg.n
+    bad = np.flatnonzero(np.abs(off) > plane_tol)
+    if len(bad):
+        raise ValueError(f"contact event {bad[0]} at {points[bad[0]]} m is {off[bad[0]]:.3e} m off "
+                         f"the fin plane (tolerance {plane_tol:.3e} m)")
+    p2 = np.column_stack([rel @ fg.e1, rel @ fg.e2])
+    to3 = lambda y2: fg.origin + y2[:, :1] * fg.e1 + y2[:, 1:2] * fg.e2  # noqa: E731
+    r = 0.5 * widths
+    segs = _boundary_segments(fg)
+
+    # 0. contact points just outside the planform (a rope on the rounded/blunt edge, round-off)
+    #    are moved to the nearest boundary point when within plane_tol; farther is an error.
+    _, _, _, inside = _locate(fg, to3(p2))
+    out = np.flatnonzero(~inside)
+    if len(out):
+        near, dist, _ = _nearest_on_boundary(segs, p2[out])
+        far = out[dist > plane_tol]
+        if len(far):
+            k = far[0]
+            raise ValueError(f"contact event {k} at {points[k]} m lies outside the fin "
+                             f"(more than {plane_tol:.3e} m from its edge)")
+        p2[out] = near
+
+    # 1. disk stencils
+    nd = len(DISK)
+    pts = (p2[:, None, :] + r[:, None, None] * DISK[None]).reshape(-1, 2)
+    cell, X, mine, found = _locate(fg, to3(pts))
+    ok_disk = found.reshape(ne, nd).all(axis=1)
+    ev_idx = [np.repeat(np.arange(ne), nd)]
+    wts = [np.full(ne * nd, 1.0 / nd)]
+    keep = [np.repeat(ok_disk, nd) & mine]
+    cells, Xs = [cell], [X]
+    todo = np.flatnonzero(~ok_disk)
+    if len(todo):
+        tdir = _nearest_on_boundary(segs, p2[todo])[2]
+        half = r[todo].copy()
+        nl = len(LINE)
+        for _ in range(12):
+            if not len(todo):
+                break
+            pts = (p2[todo, None, :] + (half[:, None] * LINE[None])[..., None] * tdir[:, None, :])
+            c, Xl, mi, fo = _locate(fg, to3(pts.reshape(-1, 2)))
+            ok = fo.reshape(-1, nl).all(axis=1)
+            ev_idx.append(np.repeat(todo, nl))
+            wts.append(np.tile(_GL[1] / 2.0, len(todo)))
+            keep.append(np.repeat(ok, nl) & mi)
+            cells.append(c)
+            Xs.append(Xl)
+            todo, tdir, half = todo[~ok], tdir[~ok], 0.5 * half[~ok]
+        if len(todo):  # last resort: point load at p
+            c, Xp, mi, fo = _locate(fg, to3(p2[todo]))
+            if not fo.all():
+                k = todo[np.flatnonzero(~fo)[0]]
+                raise ValueError(f"contact event {k} at {points[k]} m lies outside the fin")
+            ev_idx.append(todo)
+            wts.append(np.ones(len(todo)))
+            keep.append(mi)
+            cells.append(c)
+            Xs.append(Xp)
+    ev = np.concatenate(ev_idx)
+    w = np.concatenate(wts)
+    kp = np.concatenate(keep)
+    cl = np.concatenate(cells)
+    Xa = np.concatenate(Xs)
+    ev, w, cl, Xa = ev[kp], w[kp], cl[kp], Xa[kp]
+    N = _shape_q1(Xa[:, 0], Xa[:, 1])  # (m, 4)
+    V = fg.V
+    dm = V.dofmap.list.array.reshape(-1, 4)
+    blocks = dm[cl]  # (m, 4) local node blocks, basix P1 order = vertex order
+    rows = (blocks[:, :, None] * NDOF_NODE + np.arange(3)[None, None, :])  # (m, 4, 3)
+    cols = (ev[:, None, None] * 3 + np.arange(3)[None, None, :]).repeat(4, axis=1)
+    vals = (w[:, None] * N)[:, :, None].repeat(3, axis=2)
+    n_loc = (V.dofmap.index_map.size_local + V.dofmap.index_map.num_ghosts) * NDOF_NODE
+    G = sparse.csr_matrix((vals.ravel(), (rows.ravel(), cols.ravel())), shape=(n_loc, 3 * ne))
+    return _owned_rows(V, G, comm)
+
+
+def _owned_rows(V, G: sparse.csr_matrix, comm) -> sparse.csr_matrix:
+    """Add the ghost rows of the local matrix ``G`` into their owners' rows; return the owned
+    rows, shape (n_owned·5, ncols)."""
+    imap = V.dofmap.index_map
+    n_own = imap.size_local * NDOF_NODE
+    G = G.tocsr()
+    own = G[:n_own]
+    if comm.size == 1:
+        return own
+    ghost = G[n_own:].tocoo()
+    gblocks = imap.local_to_global(np.arange(imap.size_local, imap.size_local + imap.num_ghosts,
+                                             dtype=np.int32))
+    grow = gblocks[ghost.row // NDOF_NODE] * NDOF_NODE + ghost.row % NDOF_NODE  # global DOF
+    starts = np.array(comm.allgather(imap.local_range[0] * NDOF_NODE))
+    dest = np.searchsorted(starts, grow, side="right") - 1
+    send = [(grow[dest == r] - starts[r], ghost.col[dest == r], ghost.data[dest == r])
+            for r in range(comm.size)]
+    recv = comm.alltoall(send)
+    rr = np.concatenate([x[0] for x in recv]).astype(np.int64)
+    cc = np.concatenate([x[1] for x in recv]).astype(np.int64)
+    vv = np.concatenate([x[2] for x in recv])
+    return (own + sparse.csr_matrix((vv, (rr, cc)), shape=own.shape)).tocsr()

@@ -1,0 +1,93 @@
+"""The ``[shell]`` table and the per-fin input of the shell stage.
+
+Fin material (E, ν, ρ, thickness, yield) comes from the missile model; the shell table holds
+only solver settings.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from enum import Enum
+from pathlib import Path
+from typing import Literal
+
+from pydantic import Field, model_validator
+
+from flexnet_fe.schema import NonNegative, Positive, Section
+
+
+class FinSelection(str, Enum):
+    """Which fins the shell stage solves."""
+
+    ALL = "all"
+    """every fin of the missile"""
+    LOADED = "loaded"
+    """only fins that received at least one contact event in the collision stage"""
+    NAMED = "named"
+    """the fins listed in ``shell.fin_names``"""
+
+
+class ShellConfig(Section):
+    """The ``[shell]`` table: explicit shell solver settings."""
+
+    safety_factor: float = Field(0.9, gt=0, le=1,
+                                 description="time step = safety_factor × dt_crit [-]")
+    rotary_inertia_scale: Literal["auto"] | float = Field(
+        "auto",
+        description="factor (>= 1) on the rotary inertia ρt³/12, or 'auto': the smallest factor "
+                    ">= 1 that lifts the transverse-shear/rotation frequency of an element to its "
+                    "membrane frequency (mass scaling as in explicit codes) [-]")
+    shear_correction: Positive = Field(5.0 / 6.0, description="transverse shear factor κ [-]")
+    rayleigh_alpha: NonNegative = Field(0.0, description="mass-proportional damping α [1/s]")
+    rayleigh_beta: NonNegative = Field(0.0, description="stiffness-proportional damping β [s]")
+    history_interval: Positive | None = Field(
+        None, description="time between stress samples (history.csv rows, envelope) [s]; "
+                          "default: end_time / 400")
+    field_interval: Positive | None = Field(
+        None, description="time between XDMF field outputs [s]; default: end_time / 40")
+    fins: FinSelection = Field(FinSelection.LOADED, description="all | loaded | named")
+    fin_names: tuple[str, ...] = Field((), description="fins to solve when fins = 'named'")
+    end_time: Positive | None = Field(
+        None, description="simulated time [s]; default: last contact sample time + end_margin")
+    end_margin: NonNegative = Field(
+        2e-3, description="time simulated after the last collision sample when end_time is not "
+                          "given [s]")
+    element_size: Positive | None = Field(
+        None, description="fin mesh element size override passed to the mesher [m]")
+    power_iterations: int = Field(
+        1000, ge=20, description="iterations of the power method for λ_max(M⁻¹K) [-]")
+    energy_growth_limit: Positive = Field(
+        10.0, gt=1.0,
+        description="stop as unstable when kinetic + strain energy exceeds this factor times "
+                    "(initial energy + accumulated |external work|) [-]")
+    @model_validator(mode="after")
+    def _check(self) -> "ShellConfig":
+        if isinstance(self.rotary_inertia_scale, float) and self.rotary_inertia_scale < 1.0:
+            raise ValueError("rotary_inertia_scale must be >= 1 or 'auto'")
+        if self.fins is FinSelection.NAMED and not self.fin_names:
+            raise ValueError("fins = 'named' needs a non-empty fin_names")
+        if self.fins is not FinSelection.NAMED and self.fin_names:
+            raise ValueError("fin_names is only used with fins = 'named'")
+        return self
+
+
+@dataclass(frozen=True)
+class FinSpec:
+    """One fin for the shell stage: mesh file and material (from the missile model).
+
+    mesh_path: Gmsh ``.msh`` (all quadrilaterals, gdim = 3, body frame B [m]) with physical
+    groups ``surface``, ``root``, ``leading_edge``, ``tip``, ``trailing_edge``.
+    """
+
+    name: str
+    mesh_path: Path
+    thickness: float
+    """plate thickness t [m]"""
+    youngs_modulus: float
+    """E [Pa]"""
+    poisson_ratio: float
+    """ν [-]"""
+    density: float
+    """ρ [kg/m³]"""
+    yield_strength: float
+    """tensile yield strength [Pa] (reporting only)"""

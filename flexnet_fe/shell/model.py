@@ -1,0 +1,51 @@
+"""A fin's shell model: function space, material, K and lumped M (what never changes)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from dolfinx import fem
+
+from flexnet_fe.shell.explicit import MatFormat, ShellOperator, assemble_operator
+from flexnet_fe.shell.forms import ShellMaterial, Support, edge_dofs, shell_space, stiffness_forms
+from flexnet_fe.shell.mass import auto_rotary_scale, lumped_mass, min_edge_length
+from flexnet_fe.shell.meshio import FinMesh
+
+
+@dataclass(frozen=True)
+class ShellModel:
+    fin: FinMesh
+    V: fem.FunctionSpace
+    """blocked P1 space, 5 DOFs per node"""
+    material: ShellMaterial
+    rotary_scale: float
+    """rotary-inertia factor s actually used [-]"""
+    h_min: float
+    """shortest element edge [m]"""
+    op: ShellOperator
+
+
+def build_model(fin: FinMesh, material: ShellMaterial, rotary_scale: float | str = "auto", *,
+                supports: dict[str, Support] | None = None,
+                fmt: MatFormat = MatFormat.SBAIJ) -> ShellModel:
+    """Assemble K (once) and the lumped mass of a fin. ``supports``: edge group → support
+    (default: the ``root`` clamped to the missile body). ``rotary_scale``: a factor >= 1 or
+    ``"auto"`` (:func:`~flexnet_fe.shell.mass.auto_rotary_scale`)."""
+    supports = {"root": Support.CLAMPED} if supports is None else supports
+    V = shell_space(fin.mesh)
+    h = min_edge_length(fin.mesh)
+    if rotary_scale == "auto":
+        s = auto_rotary_scale(h, material)
+    elif isinstance(rotary_scale, (int, float)) and rotary_scale >= 1.0:
+        s = float(rotary_scale)
+    else:
+        raise ValueError(f"rotary_scale must be 'auto' or a number >= 1, got {rotary_scale!r}")
+    unknown = [g for g in supports if g not in fin.edge_tags]
+    if unknown:
+        raise ValueError(f"fin mesh has no edge group(s) {unknown}; has {sorted(fin.edge_tags)}")
+    fixed = [edge_dofs(V, fin.facet_tags, fin.edge_tags[g], sup) for g, sup in supports.items()]
+    cl = np.unique(np.concatenate(fixed)) if fixed else np.zeros(0, dtype=np.int64)
+    m = lumped_mass(V, material, s)
+    op = assemble_operator(stiffness_forms(V, fin.plane, material), V, m, cl, fmt)
+    return ShellModel(fin=fin, V=V, material=material, rotary_scale=s, h_min=h, op=op)
