@@ -52,8 +52,6 @@ class ShellConfig(Section):
     end_margin: NonNegative = Field(
         2e-3, description="time simulated after the last collision sample when end_time is not "
                           "given [s]")
-    element_size: Positive | None = Field(
-        None, description="fin mesh element size override passed to the mesher [m]")
     power_iterations: int = Field(
         1000, ge=20, description="iterations of the power method for λ_max(M⁻¹K) [-]")
     energy_growth_limit: Positive = Field(
