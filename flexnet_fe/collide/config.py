@@ -1,0 +1,99 @@
+"""The ``[collide]`` table of a case file (paper §IV, §V-C)."""
+
+from __future__ import annotations
+
+from enum import Enum
+
+from pydantic import Field, model_validator
+
+from flexnet_fe.contact.law import DampingModel
+from flexnet_fe.schema import Fraction, NonNegative, Positive, Section
+
+
+class NetSource(str, Enum):
+    """Where the held net of the impact comes from.
+
+    deploy_max_area  the deploy stage's ``net_state.npz`` (net at maximum area), velocities zeroed
+    flat_taut        the net's own topology laid flat in the x–y plane at its rest lengths
+    """
+
+    deploy_max_area = "deploy_max_area"
+    flat_taut = "flat_taut"
+
+
+class StiffnessRule(str, Enum):
+    """How the contact stiffness K_n [N/m^m] is chosen.
+
+    hertz_eq31     the paper's Eq. (31) with the rope radius and the rope's E, ν (rigid missile)
+    penalty        LS-DYNA SOFT=1 style k = s·m/dt² (m the lightest active node mass), expressed
+                   as K_n = k δ_ref^(1−m) with δ_ref = ``penalty_reference_fraction`` × rope radius
+    given          ``contact_stiffness`` as written in the case
+    """
+
+    hertz_eq31 = "hertz_eq31"
+    penalty = "penalty"
+    given = "given"
+
+
+class CollideConfig(Section):
+    """The ``[collide]`` table: scene, contact law, detection, time step, crop and outputs."""
+
+    net_source: NetSource = Field(NetSource.deploy_max_area,
+                                  description="held net of the impact: deploy result at max area or a flat taut net")
+    impact_speed: Positive = Field(500.0, description="missile speed relative to the held net [m/s] (paper: 500)")
+    incidence_angle: float = Field(0.0, ge=0.0, lt=1.5,
+                                   description="angle between the missile axis and world +z, pitched about world x [rad] (paper: 0)")
+    roll_angle: float = Field(0.0, ge=-3.1416, le=3.1416,
+                              description="right-handed roll of the missile about its axis x_b; 0 puts wing_1 (+y_b) along "
+                                          "world +y at zero incidence [rad]")
+    aim_point: tuple[float, float] = Field((0.0, 0.0),
+                                           description="world (x, y) where the missile axis meets the net centre plane z = 0 [m]")
+    standoff: Positive = Field(0.02, description="initial gap between nose apex and the nearest net point along the path [m]")
+    duration: Positive = Field(0.012, description="simulated time [s] (paper: impact lasts < 10 ms)")
+    gravity: bool = Field(False, description="apply gravity -g ŷ (ISA g at the altitude) to net and missile")
+
+    contact_exponent: float = Field(1.5, ge=1.0, le=2.0, description="exponent m of Eq. (28) [-] (Hertz: 1.5)")
+    restitution: float = Field(0.5, gt=0.0, le=1.0,
+                               description="coefficient of restitution e of Eq. (29) [-] (not given in the paper)")
+    damping_model: DampingModel = Field(DampingModel.lankarani_nikravesh,
+                                        description="contact damping model (Eq. (29) as printed = lankarani_nikravesh)")
+    damping_min_impact_speed: Positive = Field(
+        1.0, description="contacts that start with an approach speed v_k below this are elastic (χ ∝ 1/v_k "
+                         "would be unbounded) [m/s]")
+    friction_coefficient: NonNegative = Field(0.2, description="Coulomb friction μ of Eq. (32) [-] (not given in the paper)")
+    friction_regularisation_speed: Positive = Field(
+        0.1, description="v_reg of tanh(|v_t|/v_reg) replacing sign(v_t) in Eq. (32) [m/s]")
+    stiffness_rule: StiffnessRule = Field(StiffnessRule.penalty, description="rule for the contact stiffness K_n")
+    rope_poisson_ratio: float = Field(0.3, ge=0.0, lt=0.5, description="ν1 of the rope in Eq. (31) [-]")
+    penalty_scale: Positive = Field(0.1, le=1.0, description="s of the penalty rule k = s·m/dt² [-] (LS-DYNA SOFSCL default 0.1)")
+    penalty_reference_fraction: Positive = Field(
+        0.1, description="δ_ref / rope radius at which the penalty's secant stiffness equals s·m/dt² [-]")
+    contact_stiffness: Positive | None = Field(None, description="K_n for stiffness_rule = 'given' [N/m^m]")
+
+    detection_points_per_segment: int = Field(3, ge=0, le=64,
+                                              description="extra equally spaced detection points between two net nodes [-]")
+    fin_segment_test: bool = Field(True, description="test each rope segment against the thin fins (catches edge crossings)")
+    tunnelling_fraction: Positive = Field(
+        0.5, description="tunnelling: a rope centre line deeper inside the missile than this fraction of the rope "
+                         "radius (body) or the fin half-thickness (fin) [-]")
+    allow_tunnelling: bool = Field(False, description="finish a tunnelling run and flag it instead of stopping")
+
+    dt_safety: Fraction = Field(0.5, gt=0.0, description="time step = safety × stability limit of springs and contact [-]")
+    pass_through_fraction: Fraction = Field(
+        0.1, gt=0.0, description="relative speed × dt ≤ this × min(rope radius, fin half-thickness) [-]")
+    crop: bool = Field(True, description="integrate only the net the impact can reach; hold the rest")
+    crop_wave_speed_factor: Positive = Field(
+        4.0, description="reach = factor × sqrt(E/ρ) × duration (+ margin) around the missile's swept footprint [-]")
+    crop_margin: NonNegative = Field(0.2, description="extra reach of the crop [m]")
+    output_interval: Positive = Field(1e-5, description="sampling interval of histories and fin loads [s]")
+    snapshots: int = Field(24, ge=2, le=1000, description="number of net snapshots written (.vtu + .pvd)")
+
+    @model_validator(mode="after")
+    def _consistent(self) -> "CollideConfig":
+        if self.stiffness_rule is StiffnessRule.given and self.contact_stiffness is None:
+            raise ValueError("stiffness_rule = 'given' needs contact_stiffness")
+        if self.stiffness_rule is not StiffnessRule.given and self.contact_stiffness is not None:
+            raise ValueError("contact_stiffness is only used with stiffness_rule = 'given'")
+        if self.output_interval > self.duration:
+            raise ValueError("output_interval must not exceed duration")
+        return self

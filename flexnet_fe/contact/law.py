@@ -1,0 +1,109 @@
+"""Normal contact force, damping models and regularised friction: small numba functions.
+
+Sign convention (departs from the paper's Eq. (28), which writes penetration as δ < 0): here the
+penetration depth ``delta`` [m] is POSITIVE when the bodies overlap and ``delta_dot`` [m/s] is its
+rate (positive while approaching). All three damping models are of Hunt–Crossley form
+
+    F_n = K_n δ^m (1 + χ δ̇),        χ [s/m] the hysteresis damping factor,
+
+which is Eq. (28)+(29) with C δ̇ = χ K_n δ^m δ̇. A normal force never pulls: F_n < 0 (possible
+late in restitution when χ δ̇ < -1) is set to 0 — this is the physical "no adhesion" condition
+of a unilateral contact, not a numerical clamp.
+"""
+
+from __future__ import annotations
+
+from enum import Enum
+
+import numpy as np
+from numba import njit
+
+
+class DampingModel(str, Enum):
+    """Hysteresis damping factor χ of F_n = K δ^m (1 + χ δ̇); v_k is the approach speed at first touch.
+
+    lankarani_nikravesh  χ = 3(1 − e²)/(4 v_k)   (paper Eq. (29) as printed; Lankarani & Nikravesh 1990,
+                         derived for e → 1)
+    hunt_crossley        χ = 3(1 − e)/(2 v_k)    (Hunt & Crossley 1975, their own relation, e → 1)
+    flores               χ = 8(1 − e)/(5 e v_k)  (Flores, Machado, Silva, Martins 2011, valid for all e)
+    none                 χ = 0 (purely elastic Hertz contact)
+    """
+
+    lankarani_nikravesh = "lankarani_nikravesh"
+    hunt_crossley = "hunt_crossley"
+    flores = "flores"
+    none = "none"
+
+
+DAMPING_CODE: dict[DampingModel, int] = {
+    DampingModel.none: 0,
+    DampingModel.lankarani_nikravesh: 1,
+    DampingModel.hunt_crossley: 2,
+    DampingModel.flores: 3,
+}
+"""Integer code of each damping model, as the numba kernels take it."""
+
+
+@njit(cache=True)
+def hysteresis_factor(model_code, restitution, v_k):
+    """Damping factor χ [s/m] of a contact that started with approach speed ``v_k`` [m/s] > 0.
+
+    model_code: ``DAMPING_CODE[model]``; restitution e ∈ (0, 1]. Eq. (29) for Lankarani–Nikravesh.
+    Raises ValueError for an unknown code or v_k <= 0 (a contact that starts at rest has no
+    impact speed; the caller decides what that means).
+    """
+    e = restitution
+    if model_code == 0:
+        return 0.0
+    if v_k <= 0.0:
+        raise ValueError("hysteresis_factor: impact speed v_k must be > 0")
+    if model_code == 1:
+        return 3.0 * (1.0 - e * e) / (4.0 * v_k)
+    if model_code == 2:
+        return 3.0 * (1.0 - e) / (2.0 * v_k)
+    if model_code == 3:
+        return 8.0 * (1.0 - e) / (5.0 * e * v_k)
+    raise ValueError("hysteresis_factor: unknown damping model code")
+
+
+@njit(cache=True)
+def normal_force(delta, delta_dot, k_n, exponent, chi):
+    """Normal contact force magnitude [N], Eq. (28)–(29): F = K_n δ^m (1 + χ δ̇), never negative.
+
+    delta [m] penetration (> 0 in contact), delta_dot [m/s] its rate, k_n [N/m^m] contact
+    stiffness, exponent m (1.5 Hertz), chi [s/m] hysteresis factor. Zero when delta <= 0.
+    """
+    if delta <= 0.0:
+        return 0.0
+    f = k_n * delta ** exponent * (1.0 + chi * delta_dot)
+    return f if f > 0.0 else 0.0
+
+
+@njit(cache=True)
+def contact_potential(delta, k_n, exponent):
+    """Elastic energy [J] stored by the spring part of Eq. (28): K_n δ^(m+1)/(m+1), δ > 0."""
+    if delta <= 0.0:
+        return 0.0
+    return k_n * delta ** (exponent + 1.0) / (exponent + 1.0)
+
+
+@njit(cache=True)
+def friction_force(f_n, mu, v_t, v_reg, out):
+    """Regularised Coulomb friction, Eq. (32): F_t = −μ F_n tanh(|v_t|/v_reg) v_t/|v_t|.
+
+    f_n [N] normal force (>= 0), mu friction coefficient, v_t [m/s] (3,) relative tangential
+    velocity of the net point with respect to the missile surface, v_reg [m/s] > 0 regularisation
+    speed. Departs from Eq. (32)'s sign(v): tanh(|v|/v_reg) replaces sign so the force is
+    continuous at zero slip (its magnitude is below μF_n by the factor tanh(|v|/v_reg), i.e. less
+    than 0.1 % short once |v| > 4 v_reg). Writes the force into ``out`` (3,) and returns its magnitude.
+    """
+    s = np.sqrt(v_t[0] * v_t[0] + v_t[1] * v_t[1] + v_t[2] * v_t[2])
+    if s == 0.0 or f_n == 0.0:
+        out[0] = 0.0
+        out[1] = 0.0
+        out[2] = 0.0
+        return 0.0
+    mag = mu * f_n * np.tanh(s / v_reg)
+    for k in range(3):
+        out[k] = -mag * v_t[k] / s
+    return mag

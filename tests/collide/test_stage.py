@@ -1,0 +1,61 @@
+"""The collide stage's files: the fin_contacts.npz contract with the shell stage, history, snapshots."""
+
+from __future__ import annotations
+
+import json
+import logging
+
+import numpy as np
+import pytest
+from pydantic import ValidationError
+
+from flexnet_fe.atmosphere import isa
+from flexnet_fe.collide.config import CollideConfig
+from flexnet_fe.collide.stage import run_collide
+from flexnet_fe.io import read_history_csv
+from flexnet_fe.missile.config import MissileConfig
+from flexnet_fe.net.config import TractionNet
+
+DESIGN_KEYS = {"peak_accel_mps2", "peak_accel_axis_mps2", "duration_s", "dv_over_v", "max_attitude_change_rad",
+               "passed_through", "momentum_error_rel", "energy_error_rel", "max_penetration_m", "steps", "dt_s",
+               "wall_s"}
+
+
+def test_stage_writes_its_files(tmp_path):
+    net = TractionNet(edge_length=1.0, mesh_size=0.05, rope_diameter=4.5e-3, corner_mass=1e-3)
+    cfg = CollideConfig(net_source="flat_taut", duration=4e-3, aim_point=(0.025, 0.025), snapshots=3)
+    summary = run_collide(net, None, MissileConfig(preset="radar"), cfg, isa(8000.0), None, tmp_path,
+                          logging.getLogger("test_collide_stage"))
+    assert DESIGN_KEYS <= set(summary)
+    json.dumps(summary)  # JSON-able as summary.json needs
+    with np.load(tmp_path / "fin_contacts.npz", allow_pickle=False) as z:
+        assert set(z.files) == {"fin_names", "t", "row_start", "fin", "point", "force", "width"}
+        nt, ne = z["t"].size, z["fin"].size
+        assert z["fin_names"].dtype.kind == "U" and z["fin_names"].shape == (8,)
+        assert z["row_start"].dtype == np.int64 and z["row_start"].shape == (nt + 1,)
+        assert z["fin"].dtype == np.int32
+        assert z["point"].shape == (ne, 3) and z["force"].shape == (ne, 3) and z["width"].shape == (ne,)
+        assert z["row_start"][-1] == ne and ne > 0  # the wings were hit within 4 ms
+        assert np.all((z["fin"] >= 0) & (z["fin"] < 8))
+        np.testing.assert_allclose(z["width"], 4.5e-3)  # rope diameter
+    h = read_history_csv(tmp_path / "history.csv")
+    for c in ("t_s", "accel_body_x_mps2", "accel_body_y_mps2", "accel_body_z_mps2", "accel_mag_mps2",
+              "omega_body_x_rps", "alpha_body_z_rps2", "speed_change_rel", "roll_change_rad",
+              "max_penetration_m"):
+        assert c in h
+    assert h["accel_mag_mps2"].max() == pytest.approx(summary["peak_accel_mps2"], rel=1e-12)
+    assert (tmp_path / "net.pvd").is_file() and (tmp_path / "missile.pvd").is_file()
+    assert len(list((tmp_path / "snapshots").glob("net_*.vtu"))) == 3
+    for name in ("accel", "velocity", "attitude", "snapshots", "fin_loads"):
+        assert (tmp_path / f"collide_{name}.png").is_file()
+
+
+def test_config_refuses_unknown_and_inconsistent_values():
+    with pytest.raises(ValidationError):
+        CollideConfig(damping_model="kelvin_voigt")
+    with pytest.raises(ValidationError):
+        CollideConfig(stiffness_rule="given")  # needs contact_stiffness
+    with pytest.raises(ValidationError):
+        CollideConfig(contact_stiffness=1e9)  # only with the 'given' rule
+    with pytest.raises(ValidationError):
+        CollideConfig(bogus=1.0)
