@@ -15,7 +15,13 @@ LOG = logging.getLogger("flexnet")
 
 
 def _setup_logging(verbose: bool) -> None:
-    # dolfinx calls logging.basicConfig() on import: keep our own handler and don't propagate.
+    # dolfinx calls logging.basicConfig() on import, and ffcx then logs every JIT compile to the
+    # root logger: give the root a quiet handler first (basicConfig is then a no-op) and keep our
+    # own named logger with its own handler.
+    root = logging.getLogger()
+    if not root.handlers:
+        root.addHandler(logging.NullHandler())
+    root.setLevel(logging.WARNING)
     LOG.setLevel(logging.DEBUG if verbose else logging.INFO)
     LOG.propagate = False
     if not LOG.handlers:

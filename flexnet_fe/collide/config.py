@@ -6,7 +6,7 @@ from enum import Enum
 
 from pydantic import Field, model_validator
 
-from flexnet_fe.contact.law import DampingModel
+from flexnet_fe.contact.models import DampingModel
 from flexnet_fe.schema import Fraction, NonNegative, Positive, Section
 
 

@@ -13,35 +13,10 @@ of a unilateral contact, not a numerical clamp.
 
 from __future__ import annotations
 
-from enum import Enum
-
 import numpy as np
 from numba import njit
 
-
-class DampingModel(str, Enum):
-    """Hysteresis damping factor χ of F_n = K δ^m (1 + χ δ̇); v_k is the approach speed at first touch.
-
-    lankarani_nikravesh  χ = 3(1 − e²)/(4 v_k)   (paper Eq. (29) as printed; Lankarani & Nikravesh 1990,
-                         derived for e → 1)
-    hunt_crossley        χ = 3(1 − e)/(2 v_k)    (Hunt & Crossley 1975, their own relation, e → 1)
-    flores               χ = 8(1 − e)/(5 e v_k)  (Flores, Machado, Silva, Martins 2011, valid for all e)
-    none                 χ = 0 (purely elastic Hertz contact)
-    """
-
-    lankarani_nikravesh = "lankarani_nikravesh"
-    hunt_crossley = "hunt_crossley"
-    flores = "flores"
-    none = "none"
-
-
-DAMPING_CODE: dict[DampingModel, int] = {
-    DampingModel.none: 0,
-    DampingModel.lankarani_nikravesh: 1,
-    DampingModel.hunt_crossley: 2,
-    DampingModel.flores: 3,
-}
-"""Integer code of each damping model, as the numba kernels take it."""
+from flexnet_fe.contact.models import DAMPING_CODE, DampingModel  # noqa: F401  (re-exported)
 
 
 @njit(cache=True)
