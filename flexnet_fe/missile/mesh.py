@@ -12,7 +12,7 @@ Body mesh (pictures only, triangles): the body profile revolved about the x_b ax
 surfaces ``nose``, ``body`` (cylinder), ``base``.
 
 Gmsh 4.8.4 (Debian) crashes with ``Mesh.Algorithm = 8``; it is not used here. dolfinx 0.5.2's
-``gmshio.read_from_msh`` is broken (undefined names), so :func:`load_fin_mesh` opens the file with
+``gmshio.read_from_msh`` is broken (undefined names), so ``flexnet_fe.shell.meshio.load_fin_mesh`` opens the file with
 gmsh on rank 0 and calls ``gmshio.model_to_mesh(..., gdim=3)`` itself. gmsh is initialised once per
 process and never finalised here (see :func:`gmsh_model`).
 """
@@ -169,17 +169,3 @@ def read_msh_nodes_and_cells(path: Path, dim: int = 2):
             name, _, _, nn, _, _ = gmsh.model.mesh.getElementProperties(t)
             cells[name] = index[np.asarray(c, np.int64)].reshape(-1, nn)
     return x, cells
-
-
-def load_fin_mesh(path: Path, comm):
-    """Load a fin ``.msh`` into dolfinx 0.5.2: (mesh, cell_tags, facet_tags), gdim = 3.
-
-    The file is read by gmsh on rank 0 of ``comm`` and distributed. Tags: :data:`PHYSICAL_TAGS`.
-    """
-    from dolfinx.io import gmshio
-
-    if comm.rank == 0:
-        with gmsh_model("load_fin_mesh") as gmsh:
-            gmsh.merge(str(path))
-            return gmshio.model_to_mesh(gmsh.model, comm, 0, gdim=3)
-    return gmshio.model_to_mesh(None, comm, 0, gdim=3)

@@ -16,6 +16,8 @@ from mpi4py import MPI
 import gmsh
 from dolfinx.io import gmshio
 
+from flexnet_fe.missile.mesh import gmsh_model  # one gmsh session per process, shared
+
 EDGE_GROUPS = ("root", "leading_edge", "tip", "trailing_edge")
 
 
@@ -45,17 +47,6 @@ class FinMesh:
     edge_tags: dict
     """physical group name → tag value"""
     plane: FinPlane
-
-
-_GMSH = {"ready": False}
-
-
-def _gmsh_ready() -> None:
-    """Initialise gmsh once per process (gmsh 4.8 has no ``isInitialized``)."""
-    if not _GMSH["ready"]:
-        gmsh.initialize()
-        gmsh.option.setNumber("General.Terminal", 0)
-        _GMSH["ready"] = True
 
 
 def plane_of_points(x: np.ndarray, *, flatness_tol: float = 1e-8) -> FinPlane:
@@ -99,14 +90,10 @@ def _model_to_fin(comm: MPI.Comm) -> FinMesh:
 
 def load_fin_mesh(path: Path, comm: MPI.Comm = MPI.COMM_WORLD) -> FinMesh:
     """Read a fin ``.msh`` file (Gmsh, all quads, gdim = 3) on rank 0 and distribute it."""
-    _gmsh_ready()
-    try:
-        gmsh.model.add("fin")
+    with gmsh_model("fin"):
         if comm.rank == 0:
             gmsh.merge(str(path))
         return _model_to_fin(comm)
-    finally:
-        gmsh.model.remove()
 
 
 def _add_plate(nx: int, ny: int, lx: float, ly: float, o, a1, a2) -> None:
@@ -135,25 +122,17 @@ def plate_mesh(nx: int, ny: int, lx: float, ly: float, *, origin=(0.0, 0.0, 0.0)
     ``trailing_edge`` (s2 = 0), where s1, s2 are the coordinates along a1, a2.
     """
     o, a1, a2 = (np.asarray(v, dtype=float) for v in (origin, a1, a2))
-    _gmsh_ready()
-    try:
-        gmsh.model.add("plate")
+    with gmsh_model("plate"):
         if comm.rank == 0:
             _add_plate(nx, ny, lx, ly, o, a1, a2)
         return _model_to_fin(comm)
-    finally:
-        gmsh.model.remove()
 
 
 def write_plate_msh(path: Path, nx: int, ny: int, lx: float, ly: float, *,
                     origin=(0.0, 0.0, 0.0), a1=(1.0, 0.0, 0.0), a2=(0.0, 1.0, 0.0)) -> Path:
     """Write the :func:`plate_mesh` plate as a Gmsh ``.msh`` file (serial; tests, benchmarks)."""
     o, a1, a2 = (np.asarray(v, dtype=float) for v in (origin, a1, a2))
-    _gmsh_ready()
-    try:
-        gmsh.model.add("plate")
+    with gmsh_model("plate"):
         _add_plate(nx, ny, lx, ly, o, a1, a2)
         gmsh.write(str(path))
-    finally:
-        gmsh.model.remove()
     return Path(path)

@@ -157,9 +157,12 @@ LOAD_SCRIPT = textwrap.dedent("""
     from mpi4py import MPI
     import ufl
     from dolfinx import fem
-    from flexnet_fe.missile.mesh import PHYSICAL_TAGS, load_fin_mesh
+    from flexnet_fe.missile.mesh import PHYSICAL_TAGS
+    from flexnet_fe.shell.meshio import load_fin_mesh  # the loader the shell stage uses
     for path in sys.argv[1:]:
-        mesh, ct, ft = load_fin_mesh(path, MPI.COMM_WORLD)
+        fin = load_fin_mesh(path, MPI.COMM_WORLD)
+        mesh, ft = fin.mesh, fin.facet_tags
+        assert fin.edge_tags == {n: PHYSICAL_TAGS[n] for n in fin.edge_tags} and len(fin.edge_tags) == 4
         assert mesh.geometry.dim == 3 and mesh.topology.cell_name() == "quadrilateral"
         ds = ufl.Measure("ds", domain=mesh, subdomain_data=ft)
         vals = [fem.assemble_scalar(fem.form(1.0 * ufl.dx(domain=mesh)))]
