@@ -68,7 +68,14 @@ class CollisionResult:
 
 ENERGY_GROWTH_LIMIT = 0.5
 """A run whose total energy (kinetic + elastic + dissipated) grows by more than this fraction of
-the energy the missile has given the net stops with a NumericalError (a blow-up, not physics)."""
+the energy the missile has given the net, at ENERGY_GROWTH_SAMPLES consecutive output samples,
+stops with a NumericalError (a blow-up, not physics)."""
+ENERGY_GROWTH_SAMPLES = 3
+"""Consecutive samples the growth must persist. While a stiff penalty contact is being resolved
+the symplectic step's energy error oscillates (it is bounded, O(ω dt) of the contact energy), so
+one sample caught mid-contact can show a large error that is gone once the contact ends (the
+infrared case: +25 J against the 22 J given so far at the 40 µs sample, when the dome first hits
+a patch of net; 1.6 % of the energy given at the end). An unstable step grows and persists."""
 
 
 def rotation_vector(q: np.ndarray) -> np.ndarray:
@@ -227,6 +234,7 @@ def simulate(net: HeldNet, missile: Missile, cfg: CollideConfig, gravity: float,
     max_mom_err = 0.0
     max_energy_err = 0.0
     max_de_missile = 0.0
+    growth_run = 0
     with progress_bar(n_out, "collide") as bar:
         for k in range(1, n_out + 1):
             status, mq_new, nev = K.advance(n_sub, dt, x, v, mass, free, node_radius, seg, seg_rest, seg_k, seg_c,
@@ -287,9 +295,11 @@ def simulate(net: HeldNet, missile: Missile, cfg: CollideConfig, gravity: float,
             max_mom_err = max(max_mom_err, float(np.linalg.norm(p_err)))
             max_energy_err = max(max_energy_err, abs(e_err))
             max_de_missile = max(max_de_missile, ke_m0 - ke_m)
-            if e_err > ENERGY_GROWTH_LIMIT * max(max_de_missile, 1e-6 * ke_m0):
+            growth_run = growth_run + 1 if e_err > ENERGY_GROWTH_LIMIT * max(max_de_missile, 1e-6 * ke_m0) else 0
+            if growth_run >= ENERGY_GROWTH_SAMPLES:
                 raise NumericalError(
                     f"collide: energy grew by {e_err:.3g} J by t = {t:.4g} s, more than {ENERGY_GROWTH_LIMIT:.0%} of "
+                    f"the energy given at {ENERGY_GROWTH_SAMPLES} samples in a row; at the last, "
                     f"the {max_de_missile:.3g} J the missile has given the net: an unstable contact or step "
                     f"(dt = {dt:.3g} s, contact limit {step.dt_contact:.3g} s, K_n = {step.k_n:.3g})")
             row_start.append(row_start[-1] + nev)

@@ -104,3 +104,25 @@ def test_crop_matches_full_net(radar, log, scenes):
     assert crop.summary["free_nodes"] < 0.5 * full.summary["free_nodes"]
     assert crop.summary["crop_boundary_motion_m"] < 1e-6  # the wave never reached the held nodes
     assert crop.summary["peak_accel_mps2"] == pytest.approx(full.summary["peak_accel_mps2"], rel=0.01)
+
+
+def test_unstable_step_is_caught(radar, log, scenes, monkeypatch):
+    # Reference: the central-difference stability limit ω dt < 2 of the contact (timestep.py).
+    # A step 3× above the contact limit must stop with a NumericalError naming dt and the limit,
+    # never finish with a garbage result (energy-growth guard or non-finite state).
+    import dataclasses
+
+    import flexnet_fe.collide.simulate as sim
+
+    real = sim.choose_step
+
+    def too_large(*args, **kw):
+        st = real(*args, **kw)
+        return dataclasses.replace(st, dt=3.0 * st.dt_contact)
+
+    monkeypatch.setattr(sim, "choose_step", too_large)
+    net = scenes.flat_net(0.6, 0.05)
+    cfg = CollideConfig(net_source="flat_taut", duration=1.0e-3, aim_point=(0.025, 0.025), crop=False,
+                        stiffness_rule="given", contact_stiffness=2e9, pass_through_fraction=1.0)
+    with pytest.raises(NumericalError, match="dt = "):
+        simulate(net, radar, cfg, 9.81, log)
