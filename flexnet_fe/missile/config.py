@@ -14,7 +14,7 @@ material and aerodynamic surface parameters are the same"):
   designation-systems.net; Wikipedia "AIM-7 Sparrow"]. Exposed semi-spans follow as
   (span - diameter)/2. Chords, sweep and fin stations are not published; they are estimated from
   public three-view drawings (wings at mid-body, tail rudders at the base) and are marked as
-  estimates in ``docs/parts/missile-validation.md``.
+  estimates in ``docs/validation.md`` (missile section).
 * Radar preset: tangent-ogive radome, 0.60 m long (≈3 calibres, estimate from drawings).
 * Infrared preset: same airframe with a hemispherical seeker dome (nose length = body radius),
   as the paper's Fig. 10(b) blunt dome; its mass follows from the same mean body density, so the
