@@ -51,6 +51,17 @@ def test_default_case_whole_chain(tmp_path):
         assert (out / "shell" / name / "fields.xdmf").is_file() and (out / "shell" / name / "fields.h5").is_file()
         hist = read_history_csv(out / "shell" / name / "history.csv")
         assert np.isclose(hist["max_von_mises_pa"].max(), sec["peak_von_mises_pa"], rtol=1e-12)
+    # The stress fields open in PyVista's XDMF reader: one output time per field write, the
+    # von Mises fields as cell data on the fin's quadrilaterals.
+    import pyvista as pv
+
+    name = next(iter(fins))
+    reader = pv.XdmfReader(str(out / "shell" / name / "fields.xdmf"))
+    assert reader.number_time_points > 1
+    reader.set_active_time_value(reader.time_values[-1])
+    blocks = reader.read()
+    names = {k for b in blocks for k in b.cell_data.keys()}
+    assert {"von_mises_top_pa", "von_mises_mid_pa", "von_mises_bottom_pa"} <= names
     # Newton's third law holds through the whole impact (gravity off in the collision):
     # momentum error at round-off (see tests/collide for the controlled version).
     assert summary["collide"]["momentum_error_rel"] < 1e-8
