@@ -24,7 +24,20 @@ class WarpInitialState(str, Enum):
     """Rope nodes start with the hub's translation only; only the hub and the tip masses spin."""
 
 
-class TractionNet(Section):
+class RopeNet(Section):
+    """The rope of either net (paper §V-A gives E and ρ for the traction net; the rotary net
+    uses the same rope)."""
+
+    youngs_modulus: Positive = Field(1.0e6, description="rope Young's modulus E [Pa] (paper: 1 MPa)")
+    density: Positive = Field(1000.0, description="rope material density [kg/m^3] (paper: 1000)")
+    damping_ratio: NonNegative = Field(0.05, lt=1.0, description=(
+        "damping ratio ζ of the axial mode of one bar [-], Eq. (4); not given in the paper"))
+    slack_offset: float = Field(0.0, description=(
+        "LINK167-style offset of one bar [m]: the bar is taut when its length exceeds its rest "
+        "length − offset; > 0 pretension, < 0 slack (paper: not given, 0)"))
+
+
+class TractionNet(RopeNet):
     """Square traction net pulled open by four corner masses (paper §III-A, §V-A).
 
     The net lies flat in the x–y plane of the world frame at t = 0, centred on the origin,
@@ -37,16 +50,9 @@ class TractionNet(Section):
     subdivisions: int = Field(1, ge=1, le=16, description=(
         "lumped-mass segments per mesh bar [-]; 1 = one spring between adjacent knots (the "
         "paper's model); >1 adds rope nodes along each bar (refinement studies)"))
-    youngs_modulus: Positive = Field(1.0e6, description="rope Young's modulus E [Pa] (paper: 1 MPa)")
-    density: Positive = Field(1000.0, description="rope material density [kg/m^3] (paper: 1000)")
     rope_diameter: Positive = Field(4.5e-3, description=(
         "rope diameter d [m]; not given in the paper. Default 4.5 mm: with E = 1 MPa the first "
         "opening reaches the paper's ~100 m^2 (air off; sweep in docs/validation.md)"))
-    damping_ratio: NonNegative = Field(0.05, lt=1.0, description=(
-        "damping ratio ζ of the axial mode of one mesh bar [-], Eq. (4); not given in the paper"))
-    slack_offset: float = Field(0.0, description=(
-        "LINK167-style offset of one mesh bar [m]: the bar is taut when its length exceeds "
-        "mesh_size - offset; > 0 pretension, < 0 slack (paper: not given, 0)"))
     corner_mass: Positive = Field(1.0, description="mass of each of the four corner masses [kg] (paper: 1 kg)")
     corner_speed: Positive = Field(100.0, description=(
         "launch speed of the corner masses relative to the net centre [m/s] (paper: 100 m/s)"))
@@ -58,7 +64,7 @@ class TractionNet(Section):
         "direction) [deg]; 0 = in the net plane; not given in the paper"))
 
 
-class RotaryNet(Section):
+class RotaryNet(RopeNet):
     """Rotary net: a spinning hub with eight radial warps, wefts between adjacent warps and a
     tip mass on each warp (paper §III-B, §V-A). Flat in the x–y plane at t = 0, hub at the
     origin spinning about +z, warps straight and radial, unstretched."""
@@ -69,15 +75,9 @@ class RotaryNet(Section):
     mesh_size: Positive = Field(0.03, description="radial spacing of the weft rings [m] (paper: 3 cm)")
     subdivisions: int = Field(1, ge=1, le=16, description=(
         "lumped-mass segments per bar (warp bar or weft chord) [-]; 1 = the paper's model"))
-    youngs_modulus: Positive = Field(1.0e6, description=(
-        "rope Young's modulus E [Pa] (paper's traction-net value; not given for the rotary net)"))
-    density: Positive = Field(1000.0, description="rope material density [kg/m^3] (paper's traction-net value)")
     rope_diameter: Positive = Field(6.0e-3, description=(
         "rope diameter d [m]; not given in the paper. Default 6 mm: the first opening reaches "
         "the paper's ~110 m^2 (air off, warps in rigid rotation; sweep in docs/validation.md)"))
-    damping_ratio: NonNegative = Field(0.05, lt=1.0, description=(
-        "damping ratio ζ of the axial mode of one bar [-], Eq. (4); not given in the paper"))
-    slack_offset: float = Field(0.0, description="LINK167-style offset of one bar [m] (> 0 pretension, < 0 slack)")
     hub_radius: Positive = Field(0.1, description="radius r0 of the central rotating axis [m] (paper: 0.1 m)")
     hub_length: Positive = Field(0.03, description=(
         "axial length H of the hub cylinder [m]; not given in the paper (2.8 kg of aluminium "
