@@ -46,22 +46,43 @@ def _stage_list(text: str | None):
     return out
 
 
+def _check_budget(case, args, stages=None, out=None):
+    """Refuse (exit 2) a case that is inconsistent or above the budget (flexnet_fe.budget)."""
+    from flexnet_fe.budget import check_budget, estimate
+    from flexnet_fe.config import case_file
+
+    costs = estimate(case, case_file(args.case), stages)
+    if not getattr(args, "force", False):
+        check_budget(costs, case_file(args.case), out)
+    return costs
+
+
 def cmd_validate(args) -> int:
+    from flexnet_fe.budget import describe
     from flexnet_fe.config import load_case
 
     case, _ = load_case(args.case, args.set)
+    costs = _check_budget(case, args)
     print(f"{args.case}: ok ({case.case.name}; stages: {', '.join(s.value for s in case.case.stages)})")
+    print("estimated cost (flexnet_fe/budget.py; --force skips the budget):\n" + describe(costs))
     return 0
+
+
+def _out_dir(args, name: str, suffix: str = "") -> Path:
+    return Path(args.out) if args.out else Path("runs") / f"{name}{suffix}"
 
 
 def cmd_run(args) -> int:
     from flexnet_fe.config import load_case
-    from flexnet_fe.pipeline import run_case
+    from flexnet_fe.pipeline import is_root, plan_stages, run_case
 
     case, case_dir = load_case(args.case, args.set)
     stages = _stage_list(args.stages)
-    out = Path(args.out) if args.out else Path("runs") / case.case.name
-    summary = run_case(case, case_dir, out, stages)
+    out = _out_dir(args, case.case.name)
+    _check_budget(case, args, plan_stages(case, stages), out)
+    summary = run_case(case, case_dir, out, stages, force=args.force)
+    if not is_root():
+        return 0
     print(f"{case.case.name}: done → {out}")
     if args.report:
         from flexnet_fe.report import build_report
@@ -92,107 +113,201 @@ def cmd_mesh(args) -> int:
 
 
 def cmd_sweep(args) -> int:
-    from flexnet_fe.config import load_case
-    from flexnet_fe.sweep import parse_axis, run_many, sweep_points
+    from flexnet_fe.config import case_file, load_case
+    from flexnet_fe.runs import SWEEP_TABLE
+    from flexnet_fe.sweep import parse_axis, run_many, sweep_variants
 
     case, _ = load_case(args.case, args.set)  # fail early on a bad base case
     axes = [parse_axis(a) for a in args.vary]
-    points = sweep_points(axes)
-    out = Path(args.out) if args.out else Path("runs") / f"{case.case.name}-sweep"
-    jobs = [("_".join(o.split("=", 1)[1] for o in pt).replace("/", "-"), Path(args.case), args.set + pt)
-            for pt in points]
-    rows = run_many(jobs, out, out / "sweep.csv")
+    variants = sweep_variants(Path(args.case), args.set, axes)
+    for v in variants:  # every variant must be a valid case before anything runs
+        vcase, _ = load_case(v.case_path, list(v.overrides))
+        _check_budget(vcase, args)
+    out = _out_dir(args, case.case.name, "-sweep")
+    rows = run_many(variants, out, out / SWEEP_TABLE, jobs=args.jobs, force=args.force, executor=args.executor)
+    return _table_result(rows, "variants", out / SWEEP_TABLE)
+
+
+def _table_result(rows, what: str, table: Path) -> int:
     failed = [r for r in rows if r["error"]]
-    print(f"{len(rows) - len(failed)}/{len(rows)} points done → {out / 'sweep.csv'}")
+    print(f"{len(rows) - len(failed)}/{len(rows)} {what} done → {table}")
+    for r in failed:
+        print(f"  {r['label']}: {r['error']}")
     return 1 if failed else 0
 
 
 def cmd_batch(args) -> int:
-    from flexnet_fe.sweep import run_many
+    from flexnet_fe.config import load_case
+    from flexnet_fe.errors import CaseError
+    from flexnet_fe.runs import BATCH_TABLE
+    from flexnet_fe.sweep import Variant, run_many, safe_name
 
     cases = sorted(Path(args.folder).glob("*/case.toml"))
     if not cases:
-        from flexnet_fe.errors import CaseError
         raise CaseError(args.folder, "", "no */case.toml below this folder")
+    for c in cases:
+        load_case(c, list(args.set))
     out = Path(args.out) if args.out else Path("runs")
-    rows = run_many([(c.parent.name, c, list(args.set)) for c in cases], out, out / "batch.csv")
-    failed = [r for r in rows if r["error"]]
-    print(f"{len(rows) - len(failed)}/{len(rows)} cases done → {out / 'batch.csv'}")
-    return 1 if failed else 0
+    variants = [Variant(safe_name(c.parent.name), c, tuple(args.set)) for c in cases]
+    rows = run_many(variants, out, out / BATCH_TABLE, jobs=args.jobs, force=args.force, executor=args.executor)
+    return _table_result(rows, "cases", out / BATCH_TABLE)
 
 
 def cmd_report(args) -> int:
     from flexnet_fe.report import build_report, build_sweep_report
+    from flexnet_fe.runs import BATCH_TABLE, SWEEP_TABLE, is_run_dir
 
-    if args.sweep:
-        path = build_sweep_report(Path(args.target), args.param or None)
+    target = Path(args.target)
+    tables = [target / t for t in (SWEEP_TABLE, BATCH_TABLE)] if target.is_dir() else []
+    table = next((t for t in tables if t.is_file()), None)
+    if args.sweep or (table is not None and not is_run_dir(target)):
+        path = build_sweep_report(table or target, args.param or None)
     else:
-        path = build_report(Path(args.target))
+        path = build_report(target)
     print(f"report: {path}")
     return 0
 
 
+def cmd_status(args) -> int:
+    from flexnet_fe.errors import RunDirError
+    from flexnet_fe.io import read_json
+    from flexnet_fe.pipeline import stale_running
+    from flexnet_fe.runs import STATUS
+
+    path = Path(args.run_dir) / STATUS
+    if not path.is_file():
+        raise RunDirError(f"{args.run_dir}: not a run directory (no {STATUS})")
+    dead = set(stale_running(args.run_dir))
+    for name, rec in read_json(path)["stages"].items():
+        state = rec.get("state", "?")
+        extra = rec.get("error") or rec.get("stale_reason") or ""
+        if name in dead:
+            state, extra = "running (stale)", f"process {rec.get('pid')} on {rec.get('host')} is gone"
+        elif state == "interrupted":
+            extra = f"at {rec.get('interrupted_at')}, outputs up to t = {rec.get('outputs_up_to_s')} s"
+        print(f"{name:8s} {state}" + (f": {extra}" if extra else ""))
+    return 0
+
+
+def cmd_schema(args) -> int:
+    from flexnet_fe.schema_doc import schema_text
+
+    print(schema_text(args.table), end="")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="flexnet", description=__doc__.splitlines()[0])
+    from flexnet_fe import __version__
+
+    p = argparse.ArgumentParser(prog="flexnet", description=DESCRIPTION,
+                                formatter_class=argparse.RawDescriptionHelpFormatter, epilog=EPILOG)
     p.add_argument("-v", "--verbose", action="store_true", help="debug logging")
+    p.add_argument("--version", action="version", version=f"flexnet_fe {__version__}")
     sub = p.add_subparsers(dest="command", required=True)
 
     def add_case(sp):
         sp.add_argument("case", help="case directory or its case.toml")
         sp.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
-                        help="override a case field, e.g. --set net.rope_diameter=4e-3 (repeatable)")
+                        help="override a case field with one TOML value, e.g. --set net.rope_diameter=4e-3 "
+                             "(repeatable; `flexnet schema` lists the keys)")
 
-    sp = sub.add_parser("validate", help="check a case file and exit")
+    def add_force(sp, what):
+        sp.add_argument("--force", action="store_true", help=what)
+
+    def add_pool(sp):
+        sp.add_argument("-j", "--jobs", type=_positive_int, default=1, metavar="N",
+                        help="runs at a time in a local process pool (default 1)")
+        sp.add_argument("--executor", choices=("local", "mpi"), default="local",
+                        help="local: -j N processes; mpi: mpi4py.futures workers, launched as "
+                             "`mpiexec -n N python -m mpi4py.futures -m flexnet_fe.cli sweep …` (cluster)")
+
+    sp = sub.add_parser("validate", help="check a case file, print its estimated cost and exit")
     add_case(sp)
+    add_force(sp, "do not refuse a case above the memory/step budget")
     sp.set_defaults(func=cmd_validate)
 
-    sp = sub.add_parser("run", help="run a case's stages into a run directory")
+    sp = sub.add_parser("run", help="run a case's stages into a run directory (resumes: done stages are skipped)")
     add_case(sp)
     sp.add_argument("--out", help="run directory (default runs/<case name>)")
-    sp.add_argument("--stages", help="comma-separated stages to run (default: the case's [case].stages)")
+    sp.add_argument("--stages", help="comma-separated stages to run, in pipeline order (default: the case's "
+                                     "[case].stages, skipping those already done with the same inputs)")
     sp.add_argument("--report", action="store_true", help="also write report.html into the run directory")
+    add_force(sp, "re-run stages that are already done, and run a case above the memory/step budget")
     sp.set_defaults(func=cmd_run)
+
+    sp = sub.add_parser("status", help="print the state of each stage of a run directory")
+    sp.add_argument("run_dir", help="run directory")
+    sp.set_defaults(func=cmd_status)
 
     sp = sub.add_parser("mesh", help="build the missile's fin and body meshes with Gmsh")
     add_case(sp)
     sp.add_argument("--out", help="output folder (default meshes/<missile name>)")
     sp.set_defaults(func=cmd_mesh)
 
-    sp = sub.add_parser("sweep", help="run a case over a grid of parameter values; one CSV table")
+    sp = sub.add_parser("sweep", help="run a case over a grid of parameter values; one CSV table (resumable)")
     add_case(sp)
     sp.add_argument("--vary", action="append", required=True, metavar="KEY=V1,V2,...",
                     help="a swept field and its values (repeatable: the grid is their product)")
     sp.add_argument("--out", help="output folder (default runs/<case name>-sweep)")
+    add_pool(sp)
+    add_force(sp, "redo variants that are already done (and skip the memory/step budget)")
     sp.set_defaults(func=cmd_sweep)
 
-    sp = sub.add_parser("batch", help="run every cases/*/case.toml below a folder; one CSV table")
+    sp = sub.add_parser("batch", help="run every */case.toml below a folder; one CSV table (resumable)")
     sp.add_argument("folder", help="folder holding case directories")
     sp.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                     help="override applied to every case (repeatable)")
     sp.add_argument("--out", help="output folder (default runs/)")
+    add_pool(sp)
+    add_force(sp, "redo cases that are already done")
     sp.set_defaults(func=cmd_batch)
 
-    sp = sub.add_parser("report", help="write report.html for a run directory (or a sweep/batch table)")
-    sp.add_argument("target", help="run directory, or with --sweep a sweep.csv / batch.csv")
+    sp = sub.add_parser("report", help="write report.html for a run directory, or a sweep/batch folder or table")
+    sp.add_argument("target", help="run directory, sweep/batch folder, or a sweep.csv / batch.csv")
     sp.add_argument("--sweep", action="store_true", help="TARGET is a sweep or batch table")
     sp.add_argument("--param", action="append", metavar="KEY", help="swept parameter columns (default: detected)")
     sp.set_defaults(func=cmd_report)
+
+    sp = sub.add_parser("schema", help="list every case-file field with its unit, default and meaning")
+    sp.add_argument("table", nargs="?", help="one table, e.g. net, collide, missile.material (default: all)")
+    sp.set_defaults(func=cmd_schema)
     return p
+
+
+DESCRIPTION = "flexnet_fe: airborne net vs missile — deploy, collide, fin shell stresses, flight, report."
+EPILOG = """exit codes: 0 done, 1 a stage failed, 2 bad input or unusable run directory,
+3 numerical failure, 74 disk/permission error, 130 interrupted (Ctrl-C), 143 terminated (SIGTERM).
+Ctrl-C keeps every finished stage; `flexnet run` again resumes at the interrupted stage."""
+
+
+def _positive_int(text: str) -> int:
+    value = int(text)
+    if value < 1:
+        raise argparse.ArgumentTypeError("must be >= 1")
+    return value
 
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     _setup_logging(args.verbose)
-    from flexnet_fe.errors import FlexnetError
+    from flexnet_fe.errors import FlexnetError, RunIOError
+    from flexnet_fe.runs import signal_handlers
 
     try:
-        return args.func(args)
+        with signal_handlers():
+            return args.func(args)
     except FlexnetError as err:
-        print(f"flexnet: error: {err}", file=sys.stderr)
+        print(f"flexnet: error: {err}" if err.exit_code < 128 else f"flexnet: {err}", file=sys.stderr)
         return err.exit_code
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as err:  # outside a stage (a stage's interrupt is a StageInterrupted)
         print("flexnet: interrupted", file=sys.stderr)
-        return 130
+        return getattr(err, "exit_code", 130)
+    except OSError as err:
+        if err.errno is None:
+            raise
+        e = RunIOError(err)
+        print(f"flexnet: error: {e}", file=sys.stderr)
+        return e.exit_code
 
 
 if __name__ == "__main__":

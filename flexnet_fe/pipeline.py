@@ -1,54 +1,62 @@
 """Run a case's stages into a run directory (DESIGN.md §3) and keep ``status.json`` honest.
 
-``run_dir/``
-    ``resolved.json``  the validated config actually used (defaults filled in), versions, case hash
-    ``status.json``    per stage: pending | running | done | failed (+ error); atomic writes
-    ``summary.json``   the headline numbers, one section per completed stage
-    ``<stage>/``       the stage's own files (history.csv, fields, plots, log.txt)
+The files and states are those of :mod:`flexnet_fe.runs`. What this module guarantees:
 
-A stage that fails leaves ``status.json`` saying which and why; the files of the stages before it
-stay; its own section is absent from ``summary.json``. Re-running a stage deletes its folder first.
-A later stage may reuse an earlier stage's results from a previous run only when that run used the
-same resolved case (same hash).
+- **One writer**: the run holds ``run.lock`` (flock) from start to end; a second run into the same
+  folder is refused with one line; a lock left by a killed run is taken over with a note.
+- **No half-replaced stage**: a stage writes into ``.<stage>.partial/``, renamed to ``<stage>/``
+  when it ends (done, failed or interrupted).
+- **Signals**: SIGINT / SIGTERM during a stage record ``interrupted`` (time, signal, last output
+  time) and end with one line and exit 130 / 143. Heavy libraries are imported *before* the
+  handlers are installed: importing gmsh resets SIGINT to the default (process killed at once).
+- **I/O errors** (disk full, read-only, permission) record ``failed`` with the path and errno.
+- **Dependencies**: each stage's record holds the hash of its inputs (its case tables and its
+  upstream stages' hashes); a done stage whose inputs changed, or whose upstream stage is not
+  done, becomes ``stale``. ``flexnet run`` without ``--stages`` skips stages that are done and
+  up to date (so a re-run after an interrupt resumes) unless ``force``.
+- **MPI** (``mpirun -n N flexnet run``): rank 0 owns the run directory (lock, status, summary,
+  renames, every stage that is not distributed); the shell stage runs on every rank, the other
+  ranks writing only the solver's collective XDMF/HDF5 output inside the stage folder rank 0
+  created.
 """
 
 from __future__ import annotations
 
+import errno
+import hashlib
+import json
 import logging
+import os
 import platform
 import shutil
+import signal
+import sys
 import time
-from datetime import datetime, timezone
 from pathlib import Path
 from typing import Callable
 
 from flexnet_fe import __version__
-from flexnet_fe.config import STAGE_ORDER, STAGE_SECTIONS, Case, Stage, case_hash, resolved_dict
-from flexnet_fe.errors import CaseError, FlexnetError
+from flexnet_fe.config import Case, case_hash, resolved_dict
+from flexnet_fe.errors import CaseError, FlexnetError, Interrupted, RunIOError, StageInterrupted
 from flexnet_fe.io import atomic_write_json, read_json
-from flexnet_fe.runs import StageContext
+from flexnet_fe.runs import (RESOLVED, STAGE_LOG, STATUS, SUMMARY, RunLock, StageContext, check_run_dir,
+                             last_output_time, me, now, partial_dir, process_alive, publish_stage,
+                             signal_handlers, stage_dir)
+from flexnet_fe.stages import REGISTRY, STAGE_ORDER, Stage, pipeline_order_error
 
 LOG = logging.getLogger("flexnet")
 
-# Which earlier stage's outputs a stage reads (when the case asks for it).
-def _needs(case: Case, stage: Stage) -> tuple[Stage, ...]:
-    if stage is Stage.collide:
-        return (Stage.deploy,) if case.collide.net_source.value == "deploy_max_area" else ()
-    if stage is Stage.shell:
-        return (Stage.collide,)
-    if stage is Stage.flight:
-        return (Stage.shell,) if case.flight.damage_from_shell else ()
-    return ()
+IO_ERRNOS = {errno.ENOSPC, errno.EROFS, errno.EACCES, errno.EPERM, errno.EDQUOT, errno.EIO, errno.EFBIG}
+"""Operating-system errors reported as one line with path and errno (not a traceback)."""
 
-
-def _now() -> str:
-    return datetime.now(timezone.utc).isoformat(timespec="seconds")
+HEAVY_MODULES = ("numba", "scipy", "pydantic", "dolfinx", "gmsh")
+"""Imported (for their versions) before the signal handlers are installed."""
 
 
 def _versions() -> dict[str, str]:
     import numpy
     out = {"flexnet_fe": __version__, "python": platform.python_version(), "numpy": numpy.__version__}
-    for mod in ("numba", "scipy", "pydantic", "dolfinx", "gmsh"):
+    for mod in HEAVY_MODULES:
         try:
             out[mod] = str(__import__(mod).__version__)
         except Exception:  # not installed or not importable: record that, don't fail the run
@@ -56,92 +64,257 @@ def _versions() -> dict[str, str]:
     return out
 
 
-class _Status:
-    """status.json, rewritten atomically on every change."""
+def stage_hashes(case: Case) -> dict[Stage, str]:
+    """SHA-256 of each stage's inputs: the case tables it reads and its upstream stages' hashes
+    (so a change upstream changes every hash downstream). Stages the case cannot run are absent."""
+    data, out = resolved_dict(case), {}
+    for stage in STAGE_ORDER:
+        spec = REGISTRY[stage]
+        if any(getattr(case, t) is None for t in spec.needs):
+            continue
+        blob = {"stage": stage.value, "version": __version__, "tables": {t: data.get(t) for t in spec.reads},
+                "upstream": {u.value: out.get(u) for u in spec.upstream(case)}}
+        out[stage] = hashlib.sha256(json.dumps(blob, sort_keys=True).encode()).hexdigest()
+    return out
 
-    def __init__(self, path: Path, case: Case, digest: str):
-        self.path = path
+
+class Status:
+    """``status.json``: one record per stage, rewritten atomically on every change."""
+
+    def __init__(self, path: Path, case: Case, hashes: dict[Stage, str]):
+        self.path, self.case, self.hashes = path, case, hashes
         old = read_json(path) if path.is_file() else {}
-        stages = old.get("stages", {}) if old.get("case_hash") == digest else {}
-        self.data = {"case": case.case.name, "case_hash": digest, "stages": {
-            s.value: stages.get(s.value, {"state": "pending"}) for s in STAGE_ORDER}}
+        records = old.get("stages", {}) if isinstance(old.get("stages"), dict) else {}
+        self.data = {"case": case.case.name, "case_hash": case_hash(case),
+                     "stages": {s.value: records.get(s.value, {"state": "pending"}) for s in STAGE_ORDER}}
+        for s in STAGE_ORDER:  # we hold the lock: a record saying "running" is a dead writer's
+            rec = self.record(s)
+            if rec.get("state") == "running":
+                self.data["stages"][s.value] = {**rec, "state": "interrupted", "interrupted_at": None, "error": (
+                    f"process {rec.get('pid', '?')} on {rec.get('host', '?')} ended while running this stage "
+                    f"(found by the next run)")}
         self.save()
 
+    def record(self, stage: Stage) -> dict:
+        return self.data["stages"][stage.value]
+
     def state(self, stage: Stage) -> str:
-        return self.data["stages"][stage.value]["state"]
+        return self.record(stage).get("state", "pending")
 
     def set(self, stage: Stage, **fields) -> None:
         self.data["stages"][stage.value] = fields
         self.save()
 
+    def stale_reason(self, stage: Stage) -> str | None:
+        """Why a ``done`` stage's results no longer follow from the case, or None."""
+        rec = self.record(stage)
+        if stage not in self.hashes:
+            return "the case no longer has this stage's tables"
+        if rec.get("input_hash") != self.hashes[stage]:
+            return "its inputs changed since it ran"
+        for up in REGISTRY[stage].upstream(self.case):
+            if self.state(up) != "done":
+                return f"upstream stage '{up.value}' is {self.state(up)}"
+        return None
+
     def save(self) -> None:
+        for s in STAGE_ORDER:  # done → stale where the inputs moved on (in pipeline order)
+            rec = self.record(s)
+            if rec.get("state") == "done":
+                reason = self.stale_reason(s)
+                if reason:
+                    self.data["stages"][s.value] = {**rec, "state": "stale", "stale_reason": reason}
         atomic_write_json(self.path, self.data)
 
 
-def _stage_logger(stage_dir: Path, stage: Stage) -> tuple[logging.Logger, logging.Handler]:
+def plan_stages(case: Case, stages: list[Stage] | None) -> list[Stage]:
+    """The stages to run: ``stages`` as given (distinct, in pipeline order) or the case's own."""
+    wanted = list(stages or case.case.stages)
+    reason = pipeline_order_error(wanted)
+    if reason:
+        raise CaseError("--stages", ",".join(s.value for s in wanted), reason)
+    for stage in wanted:
+        missing = [t for t in REGISTRY[stage].needs if getattr(case, t) is None]
+        if missing:
+            raise CaseError("--stages", stage.value, f"the case has no [{missing[0]}] table, which this stage needs")
+    return wanted
+
+
+def _check_upstream(case: Case, wanted: list[Stage], status: Status, run_dir: Path) -> None:
+    for stage in wanted:
+        for up in REGISTRY[stage].upstream(case):
+            if up not in wanted and status.state(up) != "done":
+                raise FlexnetError(f"stage '{stage.value}' needs the results of stage '{up.value}', which is "
+                                   f"{status.state(up)} in {run_dir}: run with --stages {up.value},{stage.value}")
+
+
+def _stage_logger(folder: Path, stage: Stage) -> tuple[logging.Logger, logging.Handler]:
     log = logging.getLogger(f"flexnet.{stage.value}")
-    handler = logging.FileHandler(stage_dir / "log.txt", mode="w")
+    handler = logging.FileHandler(folder / STAGE_LOG, mode="w")
     handler.setFormatter(logging.Formatter("%(asctime)s %(levelname)s %(message)s"))
     log.addHandler(handler)
     return log, handler
 
 
+def _mpi_world():
+    """MPI.COMM_WORLD when launched by mpirun with more than one rank, else None (no import)."""
+    if not any(k in os.environ for k in ("OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_RANK", "MPI_LOCALNRANKS")):
+        return None
+    from mpi4py import MPI
+
+    return MPI.COMM_WORLD if MPI.COMM_WORLD.size > 1 else None
+
+
+def is_root() -> bool:
+    """True on rank 0 of an MPI run, and in a serial run."""
+    comm = _mpi_world()
+    return comm is None or comm.rank == 0
+
+
 def run_case(case: Case, case_dir: Path, run_dir: Path, stages: list[Stage] | None = None,
-             stage_funcs: dict[Stage, Callable[[StageContext], dict]] | None = None) -> dict:
-    """Run ``stages`` (default: the case's own list) in pipeline order into ``run_dir``.
+             stage_funcs: dict[Stage, Callable[[StageContext], dict]] | None = None,
+             force: bool = False, mpi: bool = True) -> dict:
+    """Run ``stages`` (default: the case's own list, skipping stages that are done and up to
+    date unless ``force``) in pipeline order into ``run_dir``. Returns the summary dict (empty on
+    ranks > 0 of an MPI run). ``mpi=False``: run serially even under mpirun (sweep workers).
 
-    Returns the summary dict. Raises the stage's error after recording it in status.json.
+    Raises :class:`StageInterrupted` on SIGINT/SIGTERM, :class:`RunIOError` on a disk error,
+    :class:`RunDirError` when another run holds the folder, else the stage's own error — each
+    after recording it in status.json.
     """
-    from flexnet_fe.stages import STAGE_FUNCS
-
-    funcs = stage_funcs or STAGE_FUNCS
-    wanted = sorted(set(stages or case.case.stages), key=STAGE_ORDER.index)
-    for stage in wanted:
-        missing = [t for t in STAGE_SECTIONS[stage] if getattr(case, t) is None]
-        if missing:
-            raise CaseError("--stages", stage.value, f"the case has no [{missing[0]}] table, which this stage needs")
+    funcs = stage_funcs or {s: spec.run for s, spec in REGISTRY.items()}
+    wanted = plan_stages(case, stages)
+    comm = _mpi_world() if mpi else None
+    if comm is not None and comm.rank != 0:
+        return _follow(comm, case, case_dir, Path(run_dir), funcs)
     run_dir = Path(run_dir)
-    run_dir.mkdir(parents=True, exist_ok=True)
-    digest = case_hash(case)
-    atomic_write_json(run_dir / "resolved.json", {
-        "case": resolved_dict(case), "case_dir": str(case_dir), "case_hash": digest,
-        "versions": _versions(), "written": _now()})
-    status = _Status(run_dir / "status.json", case, digest)
-    summary_path = run_dir / "summary.json"
+    try:
+        check_run_dir(run_dir)
+        versions = _versions()  # heavy imports first: gmsh resets SIGINT when imported
+        try:
+            run_dir.mkdir(parents=True, exist_ok=True)
+            lock = RunLock(run_dir).acquire()
+        except OSError as err:
+            raise RunIOError(err, "creating the run directory") from None
+        try:
+            if lock.note:
+                LOG.warning("%s: %s", run_dir, lock.note)
+            with signal_handlers():
+                summary = _run_locked(case, case_dir, run_dir, wanted, funcs, versions, comm,
+                                      skip_done=stages is None and not force)
+        finally:
+            lock.release()
+    finally:
+        if comm is not None:
+            comm.bcast(("end",), root=0)
+    return summary
+
+
+def _run_locked(case, case_dir, run_dir, wanted, funcs, versions, comm, skip_done: bool) -> dict:
+    hashes = stage_hashes(case)
+    atomic_write_json(run_dir / RESOLVED, {
+        "case": resolved_dict(case), "case_dir": str(case_dir), "case_hash": case_hash(case),
+        "stage_hashes": {s.value: h for s, h in hashes.items()}, "versions": versions, "written": now()})
+    status = Status(run_dir / STATUS, case, hashes)
+    summary_path = run_dir / SUMMARY
     summary = read_json(summary_path) if summary_path.is_file() else {}
     summary = {k: v for k, v in summary.items() if status.data["stages"].get(k, {}).get("state") == "done"}
-
+    _check_upstream(case, wanted, status, run_dir)
     for stage in wanted:
-        for need in _needs(case, stage):
-            if need not in wanted and status.state(need) != "done":
-                raise FlexnetError(f"stage '{stage.value}' needs the results of stage '{need.value}' "
-                                   f"for this case in {run_dir}: run with --stages {need.value},{stage.value}")
-    for stage in wanted:
-        stage_dir = run_dir / stage.value
-        if stage_dir.exists():
-            shutil.rmtree(stage_dir)
-        stage_dir.mkdir(parents=True)
-        summary.pop(stage.value, None)
-        atomic_write_json(summary_path, summary)
-        status.set(stage, state="running", started=_now())
-        log, handler = _stage_logger(stage_dir, stage)
-        t0 = time.perf_counter()
-        try:
-            LOG.info("stage %s: running → %s", stage.value, stage_dir)
-            section = funcs[stage](StageContext(case, case_dir, run_dir, stage_dir, log))
-        except BaseException as err:
-            reason = "interrupted" if isinstance(err, KeyboardInterrupt) else (str(err) or type(err).__name__)
-            log.error("stage %s failed: %s", stage.value, reason)
-            status.set(stage, state="failed", error=reason, started=status.data["stages"][stage.value]["started"],
-                       finished=_now(), wall_s=time.perf_counter() - t0)
-            raise
-        finally:
-            log.removeHandler(handler)
-            handler.close()
-        wall = time.perf_counter() - t0
+        if skip_done and status.state(stage) == "done":
+            LOG.info("stage %s: up to date (done %s), skipped; --force re-runs it", stage.value,
+                     status.record(stage).get("finished", "earlier"))
+            continue
+        section = _run_stage(stage, case, case_dir, run_dir, funcs[stage], status, summary, hashes, comm)
         summary[stage.value] = section
         atomic_write_json(summary_path, summary)
-        status.set(stage, state="done", started=status.data["stages"][stage.value]["started"],
-                   finished=_now(), wall_s=wall)
-        LOG.info("stage %s: done in %.1f s", stage.value, wall)
+        status.set(stage, **{**status.record(stage), "state": "done", "finished": now()})
     return summary
+
+
+def _run_stage(stage, case, case_dir, run_dir, func, status, summary, hashes, comm) -> dict:
+    part = partial_dir(run_dir, stage.value)
+    if part.exists():
+        shutil.rmtree(part)
+    part.mkdir()
+    summary.pop(stage.value, None)
+    atomic_write_json(run_dir / SUMMARY, summary)
+    started = now()
+    status.set(stage, state="running", started=started, input_hash=hashes[stage], **me())
+    log, handler = _stage_logger(part, stage)
+    t0 = time.perf_counter()
+    try:
+        LOG.info("stage %s: running → %s", stage.value, stage_dir(run_dir, stage.value))
+        if comm is not None and REGISTRY[stage].distributed:
+            comm.bcast(("stage", stage.value, str(part)), root=0)
+        section = func(StageContext(case, case_dir, run_dir, part, log))
+    except BaseException as err:
+        log.removeHandler(handler)
+        handler.close()
+        _record_end(stage, err, run_dir, status, started, hashes, time.perf_counter() - t0)
+        if comm is not None and REGISTRY[stage].distributed:
+            comm.Abort(getattr(err, "exit_code", 1))  # the other ranks may sit in a collective
+        shown = _translate(stage, err, run_dir, status)
+        if shown is err:
+            raise
+        raise shown from None
+    log.removeHandler(handler)
+    handler.close()
+    publish_stage(run_dir, stage.value)
+    wall = time.perf_counter() - t0
+    status.set(stage, state="running", started=started, input_hash=hashes[stage], wall_s=wall, **me())
+    LOG.info("stage %s: done in %.1f s", stage.value, wall)
+    return section
+
+
+def _record_end(stage, err, run_dir, status, started, hashes, wall) -> None:
+    """Record a stage that ended with ``err`` in status.json and put its partial files in place."""
+    base = {"started": started, "finished": now(), "input_hash": hashes[stage], "wall_s": wall, **me()}
+    if isinstance(err, OSError) and err.errno in IO_ERRNOS:
+        # Free what the stage wrote (a full disk must have room for status.json).
+        shutil.rmtree(partial_dir(run_dir, stage.value), ignore_errors=True)
+        status.set(stage, state="failed", error=str(RunIOError(err)), **base)
+        return
+    publish_stage(run_dir, stage.value)
+    if isinstance(err, KeyboardInterrupt):
+        signum = getattr(err, "signum", signal.SIGINT)
+        status.set(stage, state="interrupted", interrupted_at=now(), signal=signal.Signals(signum).name,
+                   outputs_up_to_s=last_output_time(stage_dir(run_dir, stage.value)), **base)
+        return
+    status.set(stage, state="failed", error=str(err) or type(err).__name__, **base)
+
+
+def _translate(stage, err, run_dir, status) -> BaseException:
+    """The exception the caller sees for a stage that ended with ``err``."""
+    if isinstance(err, OSError) and err.errno in IO_ERRNOS:
+        return RunIOError(err, f"running stage {stage.value}")
+    if isinstance(err, KeyboardInterrupt):
+        return StageInterrupted(stage.value, getattr(err, "signum", signal.SIGINT),
+                                status.record(stage).get("outputs_up_to_s"), str(run_dir))
+    return err
+
+
+def _follow(comm, case, case_dir, run_dir: Path, funcs) -> dict:
+    """Ranks > 0: wait for rank 0 to start a distributed stage, run it, repeat until the end.
+    They never create, lock, rename or delete anything in the run directory."""
+    while True:
+        msg = comm.bcast(None, root=0)
+        if msg[0] == "end":
+            return {}
+        _, name, part = msg
+        stage = Stage(name)
+        try:
+            funcs[stage](StageContext(case, case_dir, run_dir, Path(part), logging.getLogger(f"flexnet.{name}")))
+        except BaseException as err:  # one line, then end every rank (they may sit in a collective)
+            print(f"flexnet: error: rank {comm.rank}, stage {name}: {err or type(err).__name__}", file=sys.stderr)
+            comm.Abort(getattr(err, "exit_code", 1))
+
+
+def stale_running(run_dir: Path) -> list[str]:
+    """Stages that status.json says are ``running`` although their process is gone."""
+    path = Path(run_dir) / STATUS
+    if not path.is_file():
+        return []
+    stages = read_json(path).get("stages", {})
+    return [name for name, rec in stages.items()
+            if rec.get("state") == "running" and process_alive(rec.get("pid"), rec.get("host")) is False]

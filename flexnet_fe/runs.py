@@ -1,15 +1,54 @@
 """Run directories: the contract between stages, reports, sweeps and tests (DESIGN.md §3).
 
+Every file name the run machinery writes or reads is named here once::
+
+    <run>/resolved.json         the validated case actually used, versions, case hash
+    <run>/status.json           per stage: state, input hash, times, PID and host (atomic writes)
+    <run>/summary.json          headline numbers, one section per *done* stage
+    <run>/run.lock              the writer's lock (PID, host, start time; flock-held)
+    <run>/<stage>/              a finished (or interrupted/failed) stage's files
+    <run>/.<stage>.partial/     where a running stage writes; renamed to <stage>/ when it ends
+
 A stage is a function ``run(ctx: StageContext) -> dict`` that writes its files into
 ``ctx.stage_dir`` and returns its section of ``summary.json`` (SI units, JSON-able values).
+
+States of a stage in ``status.json``: ``pending`` (never run), ``running`` (with ``pid`` and
+``host``; a ``running`` whose process is gone is *stale*), ``done``, ``failed`` (+ ``error``),
+``interrupted`` (+ ``outputs_up_to_s``), ``stale`` (its results were computed from inputs that
+have changed since, or its upstream stage is not ``done``: re-run, never reported as done).
 """
 
 from __future__ import annotations
 
+import errno
+import fcntl
+import json
 import logging
+import os
+import shutil
+import signal
+import socket
+import threading
+from contextlib import contextmanager
 from dataclasses import dataclass
+from datetime import datetime, timezone
 from pathlib import Path
 from typing import Any
+
+RESOLVED = "resolved.json"
+STATUS = "status.json"
+SUMMARY = "summary.json"
+LOCK = "run.lock"
+HISTORY = "history.csv"
+STAGE_LOG = "log.txt"
+SWEEP_TABLE = "sweep.csv"
+BATCH_TABLE = "batch.csv"
+
+STATES = ("pending", "running", "done", "failed", "interrupted", "stale")
+
+MAX_NAME = 100
+"""Longest case, run or sweep-variant name [characters] (a path component must stay < 255 bytes
+with the suffixes added to it)."""
 
 
 @dataclass(frozen=True)
@@ -19,7 +58,8 @@ class StageContext:
     case      the validated case (``flexnet_fe.config.Case``)
     case_dir  folder of the case file; files named in the case resolve against it
     run_dir   the run directory (``runs/<name>/``); earlier stages' outputs are in its sub-folders
-    stage_dir ``run_dir / <stage name>``, created empty for this stage
+    stage_dir where this stage writes (a temporary folder, renamed to ``run_dir/<stage>`` when the
+              stage ends), created empty for it
     log       a named logger that writes to ``stage_dir / "log.txt"`` (and the console)
     """
 
@@ -31,4 +71,188 @@ class StageContext:
 
     def stage_output(self, stage: str) -> Path:
         """Folder of an earlier stage's outputs (it must have completed)."""
-        return self.run_dir / stage
+        return stage_dir(self.run_dir, stage)
+
+
+def now() -> str:
+    """UTC time stamp, ISO 8601, seconds."""
+    return datetime.now(timezone.utc).isoformat(timespec="seconds")
+
+
+def stage_dir(run_dir: Path, stage: str) -> Path:
+    return Path(run_dir) / stage
+
+
+def partial_dir(run_dir: Path, stage: str) -> Path:
+    return Path(run_dir) / f".{stage}.partial"
+
+
+def old_dir(run_dir: Path, stage: str) -> Path:
+    return Path(run_dir) / f".{stage}.old"
+
+
+def is_run_dir(path: Path) -> bool:
+    """A folder written by ``flexnet run`` (has status.json or resolved.json)."""
+    path = Path(path)
+    return (path / STATUS).is_file() or (path / RESOLVED).is_file()
+
+
+def process_alive(pid: int | None, host: str | None) -> bool | None:
+    """True/False for a process on this host; None when it cannot be told (another host)."""
+    if not pid or host != socket.gethostname():
+        return None
+    try:
+        os.kill(int(pid), 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def me() -> dict[str, Any]:
+    """This process: ``{"pid", "host"}``."""
+    return {"pid": os.getpid(), "host": socket.gethostname()}
+
+
+def publish_stage(run_dir: Path, stage: str) -> Path:
+    """Move ``.<stage>.partial/`` into place as ``<stage>/`` (the old one, if any, is removed).
+
+    Two renames: a reader sees the old complete folder or the new one, never a half-written one
+    (between the renames ``<stage>/`` is briefly absent)."""
+    src, dst, old = partial_dir(run_dir, stage), stage_dir(run_dir, stage), old_dir(run_dir, stage)
+    if old.exists():
+        shutil.rmtree(old)
+    if dst.exists():
+        os.rename(dst, old)
+    os.rename(src, dst)
+    shutil.rmtree(old, ignore_errors=True)
+    return dst
+
+
+def last_output_time(folder: Path) -> float | None:
+    """Largest ``t_s`` on the last row of ``history.csv`` in ``folder`` or its sub-folders [s]
+    (None when no history was written)."""
+    best = None
+    for path in [Path(folder) / HISTORY, *Path(folder).glob(f"*/{HISTORY}")]:
+        try:
+            lines = path.read_text().splitlines()
+            names = lines[0].split(",")
+            t = float(lines[-1].split(",")[names.index("t_s")]) if len(lines) > 1 else None
+        except (OSError, ValueError, IndexError):
+            continue
+        if t is not None and (best is None or t > best):
+            best = t
+    return best
+
+
+def _on_signal(signum, frame):
+    # Further SIGINT/SIGTERM during the clean-up are ignored (the clean-up is a few renames).
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    from flexnet_fe.errors import Interrupted
+
+    raise Interrupted(signum)
+
+
+@contextmanager
+def signal_handlers():
+    """SIGINT and SIGTERM raise :class:`Interrupted` inside the block (main thread only)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    old = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
+    for s in old:
+        signal.signal(s, _on_signal)
+    try:
+        yield
+    finally:
+        for s, h in old.items():
+            signal.signal(s, h if h is not None else signal.SIG_DFL)
+
+
+
+class RunLock:
+    """One writer per run directory: ``run.lock`` held with ``flock`` and holding the writer's
+    PID, host and start time.
+
+    The kernel releases an flock when its process dies, however it dies: a lock file that still
+    names a writer but is not locked is *stale* (its writer was killed) and is taken over with a
+    note. A lock held by a live process refuses the second run with one line.
+    """
+
+    def __init__(self, run_dir: Path):
+        self.path = Path(run_dir) / LOCK
+        self.fd: int | None = None
+        self.note = ""
+
+    def acquire(self) -> "RunLock":
+        from flexnet_fe.errors import RunDirError
+
+        fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError as err:
+            os.close(fd)
+            if err.errno not in (errno.EWOULDBLOCK, errno.EAGAIN, errno.EACCES):
+                raise
+            holder = _read_lock(self.path)
+            raise RunDirError(f"{self.path.parent}: in use by another run (PID {holder.get('pid', '?')} on "
+                              f"{holder.get('host', '?')} since {holder.get('started', '?')}); wait for it "
+                              f"to finish or choose another --out") from None
+        old = _read_fd(fd)
+        if old:
+            self.note = (f"took over the stale lock of PID {old.get('pid', '?')} on {old.get('host', '?')} "
+                         f"(started {old.get('started', '?')}), which ended without releasing it")
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, (json.dumps({**me(), "started": now()}) + "\n").encode(), 0)
+        os.fsync(fd)
+        self.fd = fd
+        return self
+
+    def release(self) -> None:
+        """Empty the lock file (an empty lock file names no writer) and unlock it. The file is
+        kept: unlinking a locked file lets a third process lock a fresh inode concurrently."""
+        if self.fd is None:
+            return
+        try:
+            os.ftruncate(self.fd, 0)
+        except OSError:
+            pass
+        os.close(self.fd)
+        self.fd = None
+
+    def __enter__(self) -> "RunLock":
+        return self.acquire()
+
+    def __exit__(self, *exc) -> None:
+        self.release()
+
+
+def _read_fd(fd: int) -> dict:
+    try:
+        text = os.pread(fd, 4096, 0).decode(errors="replace").strip()
+        return json.loads(text) if text else {}
+    except (OSError, ValueError):
+        return {"pid": "?", "host": "?", "started": "?"}
+
+
+def _read_lock(path: Path) -> dict:
+    try:
+        text = Path(path).read_text().strip()
+        return json.loads(text) if text else {}
+    except (OSError, ValueError):
+        return {}
+
+
+def check_run_dir(path: Path) -> None:
+    """Refuse an output folder that exists, is not empty and is not a run directory: the run would
+    replace sub-folders named like stages (``deploy/`` ...) that belong to someone else."""
+    from flexnet_fe.errors import RunDirError
+
+    path = Path(path)
+    if path.exists() and not path.is_dir():
+        raise RunDirError(f"{path}: exists and is not a folder")
+    if path.is_dir() and any(path.iterdir()) and not is_run_dir(path):
+        raise RunDirError(f"{path}: folder is not empty and is not a run directory (no {STATUS}); "
+                          f"choose an empty or new --out")
