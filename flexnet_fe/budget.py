@@ -9,7 +9,7 @@ imports no numba, dolfinx or gmsh) and are meant to catch the orders of magnitud
 typo into a MemoryError, a std::bad_alloc or a run of a year — not to predict a wall time.
 
 Budget (docs/validation.md "Run machinery"): memory ≤ the machine's available memory
-(``MemAvailable``), steps ≤ :data:`MAX_STEPS` per stage, disk ≤ the free space of the output
+(``MemAvailable``, or ``FLEXNET_MEMORY_BUDGET`` bytes when set), steps ≤ :data:`MAX_STEPS` per stage, disk ≤ the free space of the output
 folder. ``--force`` runs anyway.
 """
 
@@ -212,7 +212,10 @@ def estimate(case, file, stages=None) -> list[StageCost]:
 
 
 def available_memory() -> float:
-    """``MemAvailable`` of /proc/meminfo [bytes] (inf where it cannot be read)."""
+    """The memory budget [bytes]: ``FLEXNET_MEMORY_BUDGET`` (bytes) if set, else
+    ``MemAvailable`` of /proc/meminfo (inf where it cannot be read)."""
+    if os.environ.get("FLEXNET_MEMORY_BUDGET"):
+        return float(os.environ["FLEXNET_MEMORY_BUDGET"])
     try:
         for line in Path("/proc/meminfo").read_text().splitlines():
             if line.startswith("MemAvailable:"):

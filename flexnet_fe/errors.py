@@ -39,12 +39,12 @@ class RunIOError(FlexnetError):
 
     exit_code = 74
 
-    def __init__(self, err: OSError, doing: str = ""):
+    def __init__(self, err: OSError, doing: str = "", where: str | None = None):
         import errno as _errno
 
         self.errno = err.errno
         name = _errno.errorcode.get(err.errno or 0, str(err.errno))
-        path = err.filename or "(unknown path)"
+        path = err.filename or (f"a file in {where}" if where else "(path not reported by the system)")
         what = f" while {doing}" if doing else ""
         super().__init__(f"{path}: {err.strerror or err} ({name}){what}")
 

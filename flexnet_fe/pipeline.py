@@ -37,7 +37,7 @@ from typing import Callable
 
 from flexnet_fe import __version__
 from flexnet_fe.config import Case, case_hash, resolved_dict
-from flexnet_fe.errors import CaseError, FlexnetError, Interrupted, RunIOError, StageInterrupted
+from flexnet_fe.errors import CaseError, FlexnetError, RunIOError, StageInterrupted
 from flexnet_fe.io import atomic_write_json, read_json
 from flexnet_fe.runs import (RESOLVED, STAGE_LOG, STATUS, SUMMARY, RunLock, StageContext, check_run_dir,
                              last_output_time, me, now, partial_dir, process_alive, publish_stage,
@@ -225,10 +225,7 @@ def _run_locked(case, case_dir, run_dir, wanted, funcs, versions, comm, skip_don
             LOG.info("stage %s: up to date (done %s), skipped; --force re-runs it", stage.value,
                      status.record(stage).get("finished", "earlier"))
             continue
-        section = _run_stage(stage, case, case_dir, run_dir, funcs[stage], status, summary, hashes, comm)
-        summary[stage.value] = section
-        atomic_write_json(summary_path, summary)
-        status.set(stage, **{**status.record(stage), "state": "done", "finished": now()})
+        _run_stage(stage, case, case_dir, run_dir, funcs[stage], status, summary, hashes, comm)
     return summary
 
 
@@ -239,18 +236,28 @@ def _run_stage(stage, case, case_dir, run_dir, func, status, summary, hashes, co
     part.mkdir()
     summary.pop(stage.value, None)
     atomic_write_json(run_dir / SUMMARY, summary)
-    started = now()
-    status.set(stage, state="running", started=started, input_hash=hashes[stage], **me())
-    log, handler = _stage_logger(part, stage)
-    t0 = time.perf_counter()
-    try:
+    started, t0, log, handler = now(), time.perf_counter(), None, None
+    try:  # from here on, any end (signal included) is recorded
+        status.set(stage, state="running", started=started, input_hash=hashes[stage], **me())
+        log, handler = _stage_logger(part, stage)
         LOG.info("stage %s: running → %s", stage.value, stage_dir(run_dir, stage.value))
         if comm is not None and REGISTRY[stage].distributed:
             comm.bcast(("stage", stage.value, str(part)), root=0)
         section = func(StageContext(case, case_dir, run_dir, part, log))
-    except BaseException as err:
         log.removeHandler(handler)
         handler.close()
+        handler = None
+        publish_stage(run_dir, stage.value)
+        summary[stage.value] = section
+        atomic_write_json(run_dir / SUMMARY, summary)
+        wall = time.perf_counter() - t0
+        status.set(stage, state="done", started=started, finished=now(), input_hash=hashes[stage], wall_s=wall,
+                   **me())
+    except BaseException as err:
+        summary.pop(stage.value, None)
+        if handler is not None:
+            log.removeHandler(handler)
+            handler.close()
         _record_end(stage, err, run_dir, status, started, hashes, time.perf_counter() - t0)
         if comm is not None and REGISTRY[stage].distributed:
             comm.Abort(getattr(err, "exit_code", 1))  # the other ranks may sit in a collective
@@ -258,11 +265,6 @@ def _run_stage(stage, case, case_dir, run_dir, func, status, summary, hashes, co
         if shown is err:
             raise
         raise shown from None
-    log.removeHandler(handler)
-    handler.close()
-    publish_stage(run_dir, stage.value)
-    wall = time.perf_counter() - t0
-    status.set(stage, state="running", started=started, input_hash=hashes[stage], wall_s=wall, **me())
     LOG.info("stage %s: done in %.1f s", stage.value, wall)
     return section
 
@@ -273,7 +275,8 @@ def _record_end(stage, err, run_dir, status, started, hashes, wall) -> None:
     if isinstance(err, OSError) and err.errno in IO_ERRNOS:
         # Free what the stage wrote (a full disk must have room for status.json).
         shutil.rmtree(partial_dir(run_dir, stage.value), ignore_errors=True)
-        status.set(stage, state="failed", error=str(RunIOError(err)), **base)
+        status.set(stage, state="failed", error=str(RunIOError(err, where=str(stage_dir(run_dir, stage.value)))),
+                   **base)
         return
     publish_stage(run_dir, stage.value)
     if isinstance(err, KeyboardInterrupt):
@@ -287,7 +290,7 @@ def _record_end(stage, err, run_dir, status, started, hashes, wall) -> None:
 def _translate(stage, err, run_dir, status) -> BaseException:
     """The exception the caller sees for a stage that ended with ``err``."""
     if isinstance(err, OSError) and err.errno in IO_ERRNOS:
-        return RunIOError(err, f"running stage {stage.value}")
+        return RunIOError(err, f"running stage {stage.value}", str(stage_dir(run_dir, stage.value)))
     if isinstance(err, KeyboardInterrupt):
         return StageInterrupted(stage.value, getattr(err, "signum", signal.SIGINT),
                                 status.record(stage).get("outputs_up_to_s"), str(run_dir))

@@ -121,6 +121,8 @@ def publish_stage(run_dir: Path, stage: str) -> Path:
     Two renames: a reader sees the old complete folder or the new one, never a half-written one
     (between the renames ``<stage>/`` is briefly absent)."""
     src, dst, old = partial_dir(run_dir, stage), stage_dir(run_dir, stage), old_dir(run_dir, stage)
+    if not src.exists():  # already published (an interrupt arrived just after the rename)
+        return dst
     if old.exists():
         shutil.rmtree(old)
     if dst.exists():

@@ -1,0 +1,77 @@
+"""Ctrl-C and SIGTERM during a heavy stage: one line, exit 130 / 143, status ``interrupted`` with
+the time; a re-run resumes and equals an uninterrupted run (issue 11, item 1).
+
+Reference for "equals": the same case run once without interruption in another folder; every
+summary value except wall times and the full history.csv must be identical (the stages are
+deterministic: same inputs, same operations)."""
+
+from __future__ import annotations
+
+import json
+import signal
+
+import numpy as np
+import pytest
+
+from flexnet_fe.io import read_history_csv
+
+from conftest import ROOT, SIGNALS, TINY_DEPLOY, interrupt, run_cli, start_cli, status, wait_for_state
+
+DEPLOY = ROOT / "cases/traction_deploy"
+LONG = [*TINY_DEPLOY, "--set", "deploy.duration=3.0"]   # ≈ 3 s of stepping: time to interrupt it
+COLLIDE = ROOT / "cases/radar_traction"
+LONG_COLLIDE = [*TINY_DEPLOY, "--set", 'collide.net_source="flat_taut"', "--set", "collide.duration=0.02",
+                "--stages", "collide"]
+
+
+def _numbers(summary: dict) -> dict:
+    return {k: v for k, v in summary.items() if not k.startswith("wall")}
+
+
+def test_gmsh_import_resets_sigint_and_we_restore_it():
+    """The defect behind 'Ctrl-C kills at once': gmsh's import sets SIGINT to SIG_DFL."""
+    import subprocess
+    import sys
+
+    code = ("import signal, gmsh; print(int(signal.getsignal(signal.SIGINT) == signal.SIG_DFL));"
+            "from flexnet_fe.runs import signal_handlers\n"
+            "with signal_handlers(): print(int(callable(signal.getsignal(signal.SIGINT))))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, check=True)
+    assert out.stdout.split() == ["1", "1"]
+
+
+@pytest.mark.parametrize("name", ["SIGINT", "SIGTERM"])
+def test_signal_in_deploy(tmp_path, name):
+    sig, code = SIGNALS[name]
+    run = tmp_path / "run"
+    proc = start_cli("run", DEPLOY, "--out", run, *LONG)
+    wait_for_state(run, "deploy", "running", proc)
+    rc, err = interrupt(proc, sig)
+    assert rc == code, err
+    last = err.strip().splitlines()[-1]
+    assert last.startswith("flexnet: interrupted during deploy;") and "Traceback" not in err, err
+    rec = status(run)["deploy"]
+    assert rec["state"] == "interrupted" and rec["signal"] == name and rec["interrupted_at"], rec
+    assert rec["pid"] == proc.pid and rec["host"]
+    assert not (run / ".deploy.partial").exists() and (run / "deploy" / "log.txt").is_file()
+    assert json.loads((run / "summary.json").read_text()) == {}
+    if name == "SIGINT":  # the re-run resumes and equals an uninterrupted run
+        again = run_cli("run", DEPLOY, "--out", run, *LONG)
+        assert again.returncode == 0, again.stderr
+        ref = tmp_path / "ref"
+        assert run_cli("run", DEPLOY, "--out", ref, *LONG).returncode == 0
+        a, b = (json.loads((d / "summary.json").read_text())["deploy"] for d in (run, ref))
+        assert _numbers(a) == _numbers(b)
+        ha, hb = (read_history_csv(d / "deploy" / "history.csv") for d in (run, ref))
+        for k in hb:
+            np.testing.assert_array_equal(ha[k], hb[k], err_msg=k)
+
+
+def test_sigterm_in_collide(tmp_path):
+    run = tmp_path / "run"
+    proc = start_cli("run", COLLIDE, "--out", run, *LONG_COLLIDE)
+    wait_for_state(run, "collide", "running", proc, timeout=300)
+    rc, err = interrupt(proc, signal.SIGTERM)
+    assert rc == 143, err
+    assert err.strip().splitlines()[-1].startswith("flexnet: interrupted during collide;"), err
+    assert status(run)["collide"]["state"] == "interrupted"
