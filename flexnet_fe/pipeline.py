@@ -118,9 +118,9 @@ class Status:
         return None
 
     def save(self) -> None:
-        for s in STAGE_ORDER:  # done → stale where the inputs moved on (in pipeline order)
-            rec = self.record(s)
-            if rec.get("state") == "done":
+        for s in STAGE_ORDER:  # done → stale where the inputs moved on (in pipeline order);
+            rec = self.record(s)  # a stale stage stays stale (its reason updated) until re-run
+            if rec.get("state") in ("done", "stale"):
                 reason = self.stale_reason(s)
                 if reason:
                     self.data["stages"][s.value] = {**rec, "state": "stale", "stale_reason": reason}
@@ -235,10 +235,10 @@ def _run_stage(stage, case, case_dir, run_dir, func, status, summary, hashes, co
         shutil.rmtree(part)
     part.mkdir()
     summary.pop(stage.value, None)
-    atomic_write_json(run_dir / SUMMARY, summary)
     started, t0, log, handler = now(), time.perf_counter(), None, None
     try:  # from here on, any end (signal included) is recorded
         status.set(stage, state="running", started=started, input_hash=hashes[stage], **me())
+        _prune_summary(run_dir, status, summary)
         log, handler = _stage_logger(part, stage)
         LOG.info("stage %s: running → %s", stage.value, stage_dir(run_dir, stage.value))
         if comm is not None and REGISTRY[stage].distributed:
@@ -259,6 +259,7 @@ def _run_stage(stage, case, case_dir, run_dir, func, status, summary, hashes, co
             log.removeHandler(handler)
             handler.close()
         _record_end(stage, err, run_dir, status, started, hashes, time.perf_counter() - t0)
+        _prune_summary(run_dir, status, summary)
         if comm is not None and REGISTRY[stage].distributed:
             comm.Abort(getattr(err, "exit_code", 1))  # the other ranks may sit in a collective
         shown = _translate(stage, err, run_dir, status)
@@ -267,6 +268,13 @@ def _run_stage(stage, case, case_dir, run_dir, func, status, summary, hashes, co
         raise shown from None
     LOG.info("stage %s: done in %.1f s", stage.value, wall)
     return section
+
+
+def _prune_summary(run_dir: Path, status: Status, summary: dict) -> None:
+    """summary.json keeps the sections of done stages only (a stale section is removed)."""
+    for name in [k for k in summary if status.data["stages"].get(k, {}).get("state") != "done"]:
+        del summary[name]
+    atomic_write_json(run_dir / SUMMARY, summary)
 
 
 def _record_end(stage, err, run_dir, status, started, hashes, wall) -> None:
