@@ -15,19 +15,9 @@ LOG = logging.getLogger("flexnet")
 
 
 def _setup_logging(verbose: bool) -> None:
-    # dolfinx calls logging.basicConfig() on import, and ffcx then logs every JIT compile to the
-    # root logger: give the root a quiet handler first (basicConfig is then a no-op) and keep our
-    # own named logger with its own handler.
-    root = logging.getLogger()
-    if not root.handlers:
-        root.addHandler(logging.NullHandler())
-    root.setLevel(logging.WARNING)
-    LOG.setLevel(logging.DEBUG if verbose else logging.INFO)
-    LOG.propagate = False
-    if not LOG.handlers:
-        h = logging.StreamHandler(sys.stderr)
-        h.setFormatter(logging.Formatter("%(levelname)s %(name)s: %(message)s"))
-        LOG.addHandler(h)
+    from flexnet_fe.progress import setup_logging
+
+    setup_logging(logging.DEBUG if verbose else logging.INFO)
 
 
 def _stage_list(text: str | None):
@@ -291,7 +281,7 @@ def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     _setup_logging(args.verbose)
     from flexnet_fe.errors import FlexnetError, RunIOError
-    from flexnet_fe.runs import signal_handlers
+    from flexnet_fe.runs import interrupt_handled, signal_handlers
 
     try:
         with signal_handlers():
@@ -300,6 +290,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"flexnet: error: {err}" if err.exit_code < 128 else f"flexnet: {err}", file=sys.stderr)
         return err.exit_code
     except KeyboardInterrupt as err:  # outside a stage (a stage's interrupt is a StageInterrupted)
+        interrupt_handled()
         print("flexnet: interrupted", file=sys.stderr)
         return getattr(err, "exit_code", 130)
     except OSError as err:

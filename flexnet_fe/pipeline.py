@@ -41,7 +41,7 @@ from flexnet_fe.errors import CaseError, FlexnetError, RunIOError, StageInterrup
 from flexnet_fe.io import atomic_write_json, read_json
 from flexnet_fe.runs import (RESOLVED, STAGE_LOG, STATUS, SUMMARY, RunLock, StageContext, check_run_dir,
                              last_output_time, me, now, partial_dir, process_alive, publish_stage,
-                             signal_handlers, stage_dir)
+                             interrupt_handled, signal_handlers, stage_dir)
 from flexnet_fe.stages import REGISTRY, STAGE_ORDER, Stage, pipeline_order_error
 
 LOG = logging.getLogger("flexnet")
@@ -254,6 +254,8 @@ def _run_stage(stage, case, case_dir, run_dir, func, status, summary, hashes, co
         status.set(stage, state="done", started=started, finished=now(), input_hash=hashes[stage], wall_s=wall,
                    **me())
     except BaseException as err:
+        if isinstance(err, KeyboardInterrupt):
+            interrupt_handled()
         summary.pop(stage.value, None)
         if handler is not None:
             log.removeHandler(handler)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import logging
 import os
 import sys
 
@@ -16,3 +17,22 @@ def progress_bar(total: float, desc: str, unit: str = "step") -> tqdm:
     """A tqdm bar (context manager); call ``bar.update(n)`` from the stage's outer loop."""
     return tqdm(total=total, desc=desc, unit=unit, disable=not progress_enabled(), leave=False,
                 dynamic_ncols=True)
+
+
+def setup_logging(level: int = logging.INFO) -> None:
+    """Console logging of the ``flexnet`` logger (its own stderr handler, no propagation).
+
+    dolfinx calls logging.basicConfig() on import, and ffcx then logs every JIT compile to the
+    root logger: give the root a quiet handler first (basicConfig is then a no-op). Called by
+    the CLI and by every sweep worker process."""
+    root = logging.getLogger()
+    if not root.handlers:
+        root.addHandler(logging.NullHandler())
+    root.setLevel(logging.WARNING)
+    log = logging.getLogger("flexnet")
+    log.setLevel(level)
+    log.propagate = False
+    if not log.handlers:
+        h = logging.StreamHandler(sys.stderr)
+        h.setFormatter(logging.Formatter("%(levelname)s %(name)s: %(message)s"))
+        log.addHandler(h)

@@ -29,6 +29,7 @@ import shutil
 import signal
 import socket
 import threading
+import time
 from contextlib import contextmanager
 from dataclasses import dataclass
 from datetime import datetime, timezone
@@ -148,13 +149,48 @@ def last_output_time(folder: Path) -> float | None:
     return best
 
 
+class _SignalState:
+    """The interrupt in progress: ``pending`` signal number, ``handled`` once the code that
+    caught :class:`Interrupted` has started its clean-up, ``depth`` of nested handler blocks."""
+
+    pending: int | None = None
+    handled: bool = False
+    redeliver: threading.Thread | None = None
+    depth: int = 0
+
+
+_SIG = _SignalState()
+
+REDELIVER_S = 2.0
+"""If an Interrupted raised by the handler is swallowed (Python ignores exceptions raised inside
+``__del__`` and weakref callbacks, where a signal can land), the signal is delivered again after
+this many seconds [s], until some code reports it handled."""
+
+
 def _on_signal(signum, frame):
-    # Further SIGINT/SIGTERM during the clean-up are ignored (the clean-up is a few renames).
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    signal.signal(signal.SIGTERM, signal.SIG_IGN)
     from flexnet_fe.errors import Interrupted
 
+    if _SIG.handled:
+        return  # the clean-up is running (a few renames and writes): let it finish
+    _SIG.pending = signum
+    if _SIG.redeliver is None:
+        _SIG.redeliver = threading.Thread(target=_redeliver, daemon=True)
+        _SIG.redeliver.start()
     raise Interrupted(signum)
+
+
+def _redeliver() -> None:
+    while True:
+        time.sleep(REDELIVER_S)
+        if _SIG.pending is None or _SIG.handled:
+            return
+        os.kill(os.getpid(), _SIG.pending)
+
+
+def interrupt_handled() -> None:
+    """Called by the code that caught :class:`Interrupted`: no re-delivery, and further
+    SIGINT/SIGTERM are ignored until the outermost :func:`signal_handlers` block ends."""
+    _SIG.handled = True
 
 
 @contextmanager
@@ -166,12 +202,18 @@ def signal_handlers():
     old = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
     for s in old:
         signal.signal(s, _on_signal)
+    _SIG.depth += 1
     try:
         yield
     finally:
+        _SIG.depth -= 1
         for s, h in old.items():
             signal.signal(s, h if h is not None else signal.SIG_DFL)
-
+        if _SIG.depth == 0:
+            lost = _SIG.pending if not _SIG.handled else None
+            _SIG.pending, _SIG.handled, _SIG.redeliver = None, False, None
+            if lost is not None:  # the Interrupted was swallowed and the block ended: not lost
+                os.kill(os.getpid(), lost)
 
 
 class RunLock:

@@ -25,16 +25,18 @@ import hashlib
 import io
 import itertools
 import logging
+import multiprocessing
+import os
 import re
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Iterable
 
 from flexnet_fe.config import load_case
-from flexnet_fe.errors import CaseError, FlexnetError
+from flexnet_fe.errors import CaseError, FlexnetError, StageInterrupted
 from flexnet_fe.io import atomic_write_text, read_json
 from flexnet_fe.progress import progress_bar
-from flexnet_fe.runs import MAX_NAME, STATUS, SUMMARY
+from flexnet_fe.runs import MAX_NAME, STATUS, SUMMARY, interrupt_handled
 
 LOG = logging.getLogger("flexnet")
 
@@ -90,7 +92,8 @@ def variant_label(point: list[str], axes: list[tuple[str, list[str]]]) -> str:
     parts = []
     for (key, _), text in zip(axes, point):
         short = key.rsplit(".", 1)[-1]
-        parts.append(f"{short if lasts.count(short) == 1 else key}-{text.split('=', 1)[1]}")
+        value = text.split("=", 1)[1].strip().strip("'\"")
+        parts.append(f"{short if lasts.count(short) == 1 else key}-{value}")
     return safe_name("_".join(parts))
 
 
@@ -153,6 +156,14 @@ def run_variant(variant: Variant, out: str, force: bool = False) -> dict[str, An
             summary = run_case(case, case_dir, run_dir, force=force, mpi=False)
         row.update(flatten(summary))
         row[ERROR] = ""
+    except StageInterrupted as err:
+        LOG.error("%s: %s", variant.label, err)
+        if multiprocessing.parent_process() is not None:
+            # A pool worker told to stop (Pool.terminate sends SIGTERM): status.json already says
+            # "interrupted"; end now — returning a row would block on the pool's dead result queue.
+            logging.shutdown()
+            os._exit(err.exit_code)
+        raise
     except (FlexnetError, ArithmeticError, ValueError, RuntimeError, OSError) as err:
         LOG.error("%s: %s", variant.label, err)
         row[ERROR] = str(err) or type(err).__name__
@@ -200,7 +211,10 @@ def run_many(variants: list[Variant], out: Path, table: Path, jobs: int = 1, for
 def _run_pool(variants, out, force, jobs, finished) -> None:
     import multiprocessing as mp
 
-    pool = mp.get_context("spawn").Pool(jobs)
+    from flexnet_fe.progress import setup_logging
+
+    pool = mp.get_context("spawn").Pool(jobs, initializer=setup_logging,
+                                        initargs=(logging.getLogger("flexnet").getEffectiveLevel(),))
     try:
         results = [pool.apply_async(run_variant, (v, str(out), force)) for v in variants]
         pending = list(results)
@@ -211,11 +225,29 @@ def _run_pool(variants, out, force, jobs, finished) -> None:
             if pending:
                 pending[0].wait(0.2)
         pool.close()
-    except BaseException:
-        pool.terminate()  # SIGTERM to the workers: each records its stage as interrupted
+    except BaseException as err:
+        if isinstance(err, KeyboardInterrupt):
+            interrupt_handled()
+        _stop_workers()
+        pool.terminate()
         raise
     finally:
         pool.join()
+
+
+def _stop_workers(grace_s: float = 20.0) -> None:
+    """SIGTERM to every worker (each records its running stage as interrupted and exits), then
+    SIGKILL to any still alive after ``grace_s``: a worker that already finished its variant
+    would otherwise block on the pool's closed result queue and ``Pool.terminate`` would wait."""
+    import multiprocessing as mp
+
+    workers = mp.active_children()
+    for w in workers:
+        w.terminate()
+    for w in workers:
+        w.join(grace_s / max(len(workers), 1))
+        if w.is_alive():
+            w.kill()
 
 
 def _run_mpi(variants, out, force, finished) -> None:
