@@ -185,12 +185,14 @@ def run_case(case: Case, case_dir: Path, run_dir: Path, stages: list[Stage] | No
     funcs = stage_funcs or {s: spec.run for s, spec in REGISTRY.items()}
     wanted = plan_stages(case, stages)
     comm = _mpi_world() if mpi else None
+    # Heavy imports first, on every rank: gmsh resets SIGINT when imported, and PETSc's
+    # initialisation (imported with dolfinx) is collective, so all ranks must do it together.
+    versions = _versions()
     if comm is not None and comm.rank != 0:
         return _follow(comm, case, case_dir, Path(run_dir), funcs)
     run_dir = Path(run_dir)
     try:
         check_run_dir(run_dir)
-        versions = _versions()  # heavy imports first: gmsh resets SIGINT when imported
         try:
             run_dir.mkdir(parents=True, exist_ok=True)
             lock = RunLock(run_dir).acquire()
