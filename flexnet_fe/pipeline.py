@@ -165,6 +165,21 @@ def _mpi_world():
     return MPI.COMM_WORLD if MPI.COMM_WORLD.size > 1 else None
 
 
+def _petsc_on_self():
+    """Under mpirun but running a case alone (a sweep worker): initialise PETSc on COMM_SELF
+    before dolfinx is imported (its default, COMM_WORLD, is collective over all the workers).
+    Returns MPI.COMM_SELF then, else None."""
+    if not any(k in os.environ for k in ("OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_RANK", "MPI_LOCALNRANKS")):
+        return None
+    from mpi4py import MPI
+
+    if "petsc4py.PETSc" not in sys.modules:
+        import petsc4py
+
+        petsc4py.init(comm=MPI.COMM_SELF)
+    return MPI.COMM_SELF
+
+
 def is_root() -> bool:
     """True on rank 0 of an MPI run, and in a serial run."""
     comm = _mpi_world()
@@ -185,6 +200,7 @@ def run_case(case: Case, case_dir: Path, run_dir: Path, stages: list[Stage] | No
     funcs = stage_funcs or {s: spec.run for s, spec in REGISTRY.items()}
     wanted = plan_stages(case, stages)
     comm = _mpi_world() if mpi else None
+    self_comm = None if mpi else _petsc_on_self()
     # Heavy imports first, on every rank: gmsh resets SIGINT when imported, and PETSc's
     # initialisation (imported with dolfinx) is collective, so all ranks must do it together.
     versions = _versions()
@@ -202,7 +218,7 @@ def run_case(case: Case, case_dir: Path, run_dir: Path, stages: list[Stage] | No
             if lock.note:
                 LOG.warning("%s: %s", run_dir, lock.note)
             with signal_handlers():
-                summary = _run_locked(case, case_dir, run_dir, wanted, funcs, versions, comm,
+                summary = _run_locked(case, case_dir, run_dir, wanted, funcs, versions, comm or self_comm,
                                       skip_done=stages is None and not force)
         finally:
             lock.release()
@@ -232,6 +248,7 @@ def _run_locked(case, case_dir, run_dir, wanted, funcs, versions, comm, skip_don
 
 
 def _run_stage(stage, case, case_dir, run_dir, func, status, summary, hashes, comm) -> dict:
+    distributed = comm is not None and comm.size > 1 and REGISTRY[stage].distributed
     part = partial_dir(run_dir, stage.value)
     if part.exists():
         shutil.rmtree(part)
@@ -243,9 +260,9 @@ def _run_stage(stage, case, case_dir, run_dir, func, status, summary, hashes, co
         _prune_summary(run_dir, status, summary)
         log, handler = _stage_logger(part, stage)
         LOG.info("stage %s: running → %s", stage.value, stage_dir(run_dir, stage.value))
-        if comm is not None and REGISTRY[stage].distributed:
+        if distributed:
             comm.bcast(("stage", stage.value, str(part)), root=0)
-        section = func(StageContext(case, case_dir, run_dir, part, log))
+        section = func(StageContext(case, case_dir, run_dir, part, log, comm))
         log.removeHandler(handler)
         handler.close()
         handler = None
@@ -264,7 +281,7 @@ def _run_stage(stage, case, case_dir, run_dir, func, status, summary, hashes, co
             handler.close()
         _record_end(stage, err, run_dir, status, started, hashes, time.perf_counter() - t0)
         _prune_summary(run_dir, status, summary)
-        if comm is not None and REGISTRY[stage].distributed:
+        if distributed:
             comm.Abort(getattr(err, "exit_code", 1))  # the other ranks may sit in a collective
         shown = _translate(stage, err, run_dir, status)
         if shown is err:
@@ -319,7 +336,7 @@ def _follow(comm, case, case_dir, run_dir: Path, funcs) -> dict:
         _, name, part = msg
         stage = Stage(name)
         try:
-            funcs[stage](StageContext(case, case_dir, run_dir, Path(part), logging.getLogger(f"flexnet.{name}")))
+            funcs[stage](StageContext(case, case_dir, run_dir, Path(part), logging.getLogger(f"flexnet.{name}"), comm))
         except BaseException as err:  # one line, then end every rank (they may sit in a collective)
             print(f"flexnet: error: rank {comm.rank}, stage {name}: {err or type(err).__name__}", file=sys.stderr)
             comm.Abort(getattr(err, "exit_code", 1))

@@ -69,6 +69,9 @@ class StageContext:
     run_dir: Path
     stage_dir: Path
     log: logging.Logger
+    comm: Any = None
+    """MPI communicator of a distributed stage; None = ``MPI.COMM_WORLD`` (COMM_SELF is passed
+    when one rank of an MPI job runs a whole case alone, e.g. an mpi4py.futures sweep worker)."""
 
     def stage_output(self, stage: str) -> Path:
         """Folder of an earlier stage's outputs (it must have completed)."""

@@ -57,14 +57,14 @@ def shell(ctx: StageContext) -> dict:
     from flexnet_fe.missile.mesh import write_meshes
     from flexnet_fe.shell.stage import fin_specs, run_shell
 
-    c, comm = ctx.case, MPI.COMM_WORLD
+    c, comm = ctx.case, ctx.comm or MPI.COMM_WORLD
     # Meshes are rebuilt from the case's own missile table (0.3–1.5 s), never taken stale from meshes/.
     mesh_paths = write_meshes(c.missile, ctx.stage_dir / "meshes") if comm.rank == 0 else None
     mesh_paths = comm.bcast(mesh_paths, root=0)
     fins = fin_specs(build_missile(c.missile).fins, mesh_paths)
     collide_dir = ctx.stage_output("collide")
     return run_shell(c.shell, fins, collide_dir / "fin_contacts.npz", collide_dir / "history.csv",
-                     ctx.stage_dir, ctx.log)
+                     ctx.stage_dir, ctx.log, comm)
 
 
 def flight(ctx: StageContext) -> dict:
