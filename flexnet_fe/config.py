@@ -37,8 +37,8 @@ class CaseMeta(Section):
     """The ``[case]`` table."""
 
     name: str = Field(min_length=1, max_length=MAX_NAME,
-                      description="case name: letters, digits, _ . - (not starting with '.'), at most "
-                                  "100 characters; the default run directory is runs/<name>")
+                      description="case name: letters, digits and the characters '_', '.', '-' (not "
+                                  "starting with '.'), at most 100 characters; the default run directory is runs/<name>")
     description: str = Field("", description="free text shown in reports")
     stages: tuple[Stage, ...] = Field(min_length=1, description="stages `flexnet run` runs, in pipeline order")
 
