@@ -30,6 +30,10 @@ per step on a tiny model; days on a real one)."""
 F8 = 8
 """bytes per float64"""
 
+BASE_PROCESS = 0.45e9
+"""Memory of a flexnet process before any stage allocates [bytes]: Python with numpy, numba,
+dolfinx/PETSc and gmsh imported (measured: 419 MB maximum resident set of a 121-node deploy)."""
+
 
 @dataclass
 class StageCost:
@@ -98,8 +102,10 @@ def check_net(net, file) -> tuple[float, float, float, float]:
 def deploy_cost(case, file) -> StageCost:
     """Steps: the spring limit of an interior knot of 4 segments (mass 2ρAl0, ω² = 4E/(ρl0²)) is
     dt = l0/c; with the safety factor dt = safety·l0/c (the drag limit, which depends on the
-    state, can only make it smaller, so this is a lower bound on the steps). Memory: the model
-    (≈ 40 floats per node and per segment) plus ≈ 16 history columns per output row; disk: one
+    state, can only make it smaller, so this is a lower bound on the steps). Memory: the process
+    itself (:data:`BASE_PROCESS`), the model and its work arrays (≈ 100 floats per node and per
+    segment: measured 574 MB above the base for 2.5e5 nodes + 5.0e5 segments, i.e. 95 floats)
+    plus ≈ 16 history columns per output row; disk: one
     .vtu snapshot of ≈ 60 B per node and per segment every snapshot_interval."""
     d, net = case.deploy, case.net
     nodes, segs, l0, c = check_net(net, file)
@@ -114,10 +120,10 @@ def deploy_cost(case, file) -> StageCost:
     dt = d.time_step or d.safety_factor * limit
     rows = d.duration / d.output_interval
     snaps = d.duration / min(d.snapshot_interval, d.duration)
-    mem = 40 * F8 * (nodes + segs) + 16 * F8 * rows
+    mem = BASE_PROCESS + 100 * F8 * (nodes + segs) + 16 * F8 * rows
     cost = StageCost("deploy", nodes, 3 * nodes, d.duration / dt, mem, 60 * (nodes + segs) * snaps + 16 * 25 * rows,
                      {"nodes": "net.mesh_size", "steps": "deploy.duration", "memory": _mem_driver(
-                         40 * F8 * (nodes + segs), 16 * F8 * rows, "net.mesh_size", "deploy.output_interval"),
+                         100 * F8 * (nodes + segs), 16 * F8 * rows, "net.mesh_size", "deploy.output_interval"),
                       "disk": "deploy.snapshot_interval"})
     cost.detail = (f"{rows:.3g} history rows = deploy.duration / deploy.output_interval, "
                    f"{snaps:.3g} snapshots, dt ≈ {dt:.3g} s")
@@ -131,9 +137,9 @@ def _mem_driver(a: float, b: float, field_a: str, field_b: str) -> str:
 def collide_cost(case, file) -> StageCost:
     """Steps: the pass-through limit of ``collide/timestep.py``, dt ≤ pass_through_fraction ×
     min(rope radius, fin half-thickness) / impact speed (the contact and spring limits can only
-    make dt smaller). Memory: the held net (≈ 60 floats per node), ≈ 40 history columns per
-    output row and the fin-contact events (≈ 10 floats per detection point per output row at
-    most, one row per node reached); disk: snapshots (60 B per node) × snapshots."""
+    make dt smaller). Memory: the process, the held net and its work arrays (≈ 100 floats per
+    node and per segment, as deploy; not measured separately) and ≈ 40 history columns per output
+    row; disk: snapshots (60 B per node) × snapshots."""
     cc, net = case.collide, case.net
     nodes, segs, l0, c = check_net(net, file)
     missile = case.missile
@@ -143,11 +149,11 @@ def collide_cost(case, file) -> StageCost:
     gap = min(0.5 * net.rope_diameter, fin_half)
     dt = cc.dt_safety * cc.pass_through_fraction * gap / cc.impact_speed
     rows = cc.duration / cc.output_interval
-    mem = 60 * F8 * (nodes + segs) + 40 * F8 * rows
+    mem = BASE_PROCESS + 100 * F8 * (nodes + segs) + 40 * F8 * rows
     cost = StageCost("collide", nodes, 3 * nodes + 6, cc.duration / dt, mem,
                      60 * (nodes + segs) * cc.snapshots + 40 * 25 * rows,
                      {"nodes": "net.mesh_size", "steps": "collide.impact_speed",
-                      "memory": _mem_driver(60 * F8 * (nodes + segs), 40 * F8 * rows, "net.mesh_size",
+                      "memory": _mem_driver(100 * F8 * (nodes + segs), 40 * F8 * rows, "net.mesh_size",
                                             "collide.output_interval"), "disk": "collide.output_interval"})
     cost.detail = (f"{rows:.3g} history rows = collide.duration / collide.output_interval, "
                    f"dt ≤ {dt:.3g} s from the pass-through limit")
@@ -179,7 +185,7 @@ def shell_cost(case, file) -> StageCost:
     end = sh.end_time or (case.collide.duration + sh.end_margin)
     dt = sh.safety_factor * h / cp
     outputs = end / sh.field_interval if sh.field_interval else 40
-    mem = max(1e3 * elements, 2e3 * 6 * nodes)
+    mem = BASE_PROCESS + max(1e3 * elements, 2e3 * 6 * nodes)
     cost = StageCost("shell", nodes, 6 * nodes, end / dt, mem, 8 * F8 * elements * outputs,
                      {"nodes": "missile.mesh_size", "steps": "missile.mesh_size", "memory": "missile.mesh_size",
                       "disk": "shell.field_interval"})
@@ -194,7 +200,7 @@ def flight_cost(case, file) -> StageCost:
     f = case.flight
     runs = 1 + (2 * len(f.sweep.values) if f.sweep is not None else 0)
     rec = f.t_end / max(f.output_dt, f.dt) + 2
-    mem = rec * (1 + 26 + 30) * F8
+    mem = BASE_PROCESS + rec * (1 + 26 + 30) * F8
     cost = StageCost("flight", 1, 26, runs * f.t_end / f.dt, mem, rec * 40 * 25,
                      {"nodes": "flight", "steps": "flight.t_end", "memory": "flight.output_dt", "disk": "flight.output_dt"})
     cost.detail = f"{rec:.3g} records = flight.t_end / flight.output_dt, {runs} engagement(s) of t_end / dt steps"

@@ -105,14 +105,14 @@ def cmd_mesh(args) -> int:
 def cmd_sweep(args) -> int:
     from flexnet_fe.config import case_file, load_case
     from flexnet_fe.runs import SWEEP_TABLE
-    from flexnet_fe.sweep import parse_axis, run_many, sweep_variants
+    from flexnet_fe.sweep import parse_axis, run_many, sweep_variants, without_builtin_sweep
 
     case, _ = load_case(args.case, args.set)  # fail early on a bad base case
     axes = [parse_axis(a) for a in args.vary]
     variants = sweep_variants(Path(args.case), args.set, axes)
     for v in variants:  # every variant must be a valid case before anything runs
         vcase, _ = load_case(v.case_path, list(v.overrides))
-        _check_budget(vcase, args)
+        _check_budget(without_builtin_sweep(vcase), args)
     out = _out_dir(args, case.case.name, "-sweep")
     rows = run_many(variants, out, out / SWEEP_TABLE, jobs=args.jobs, force=args.force, executor=args.executor)
     return _table_result(rows, "variants", out / SWEEP_TABLE)
@@ -138,7 +138,7 @@ def cmd_batch(args) -> int:
     for c in cases:
         load_case(c, list(args.set))
     out = Path(args.out) if args.out else Path("runs")
-    variants = [Variant(safe_name(c.parent.name), c, tuple(args.set)) for c in cases]
+    variants = [Variant(safe_name(c.parent.name), c, tuple(args.set), sweep_point=False) for c in cases]
     rows = run_many(variants, out, out / BATCH_TABLE, jobs=args.jobs, force=args.force, executor=args.executor)
     return _table_result(rows, "cases", out / BATCH_TABLE)
 

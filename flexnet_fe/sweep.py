@@ -52,6 +52,9 @@ class Variant:
     case_path: Path
     overrides: tuple[str, ...]
     params: tuple[tuple[str, str], ...] = ()
+    sweep_point: bool = True
+    """True: a point of a sweep (the case's own ``[flight.sweep]`` is dropped); False: a batch
+    case, run as it is."""
 
 
 def parse_axis(text: str) -> tuple[str, list[str]]:
@@ -148,7 +151,8 @@ def run_variant(variant: Variant, out: str, force: bool = False) -> dict[str, An
     run_dir = Path(out) / variant.label
     try:
         case, case_dir = load_case(variant.case_path, list(variant.overrides))
-        case = without_builtin_sweep(case)
+        if variant.sweep_point:
+            case = without_builtin_sweep(case)
         if not force and variant_done(run_dir, case):
             LOG.info("%s: done earlier with the same inputs, reused (--force redoes it)", variant.label)
             summary = read_json(run_dir / SUMMARY)

@@ -109,3 +109,15 @@ def test_stage_without_its_table_is_refused(tmp_path):
     r = run_cli("run", ROOT / "cases/traction_deploy", "--out", tmp_path / "r", "--stages", "deploy,collide")
     assert r.returncode == 2 and "--stages" in r.stderr and "[missile]" in r.stderr, r.stderr
     assert not (tmp_path / "r").exists()
+
+
+def test_report_on_a_sweep_folder_routes_to_the_sweep_report(tmp_path, monkeypatch, capsys):
+    """`flexnet report <sweep dir>` just works (issue 12 §5): the folder's sweep.csv is used."""
+    import flexnet_fe.report as report
+    from flexnet_fe.cli import main
+
+    (tmp_path / "sweep.csv").write_text("label,error\na,\n")
+    seen = []
+    monkeypatch.setattr(report, "build_sweep_report", lambda table, params: seen.append(table) or table)
+    assert main(["report", str(tmp_path)]) == 0
+    assert seen == [tmp_path / "sweep.csv"]
