@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import signal
+import time
 
 import numpy as np
 import pytest
@@ -75,3 +76,27 @@ def test_sigterm_in_collide(tmp_path):
     assert rc == 143, err
     assert err.strip().splitlines()[-1].startswith("flexnet: interrupted during collide;"), err
     assert status(run)["collide"]["state"] == "interrupted"
+
+
+def test_sigint_in_shell_after_gmsh(tmp_path):
+    """The shell stage imports and runs gmsh (which resets SIGINT) before its solver: Ctrl-C
+    there must still give the line, 130 and 'interrupted'. The collide outputs are synthetic
+    (the MPI test's fixture), so only the shell stage runs."""
+    from flexnet_fe.config import load_case
+    from flexnet_fe.pipeline import run_case
+    from flexnet_fe.stages import Stage
+
+    from test_mpi_run import RADAR, fake_collide
+
+    small = ["missile.mesh_size=0.05", "shell.end_time=0.05", 'collide.net_source="flat_taut"']
+    case, case_dir = load_case(RADAR, small)
+    run = tmp_path / "run"
+    run_case(case, case_dir, run, [Stage.collide], stage_funcs={Stage.collide: fake_collide})
+    proc = start_cli("run", RADAR, "--out", run, "--stages", "shell", *[a for s in small for a in ("--set", s)])
+    wait_for_state(run, "shell", "running", proc)
+    time.sleep(3.0)  # past the meshing (gmsh), into the solver
+    rc, err = interrupt(proc, signal.SIGINT)
+    assert rc == 130, err
+    assert err.strip().splitlines()[-1].startswith("flexnet: interrupted during shell;"), err
+    st = status(run)
+    assert st["shell"]["state"] == "interrupted" and st["collide"]["state"] == "done"
