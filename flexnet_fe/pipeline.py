@@ -224,7 +224,7 @@ def run_case(case: Case, case_dir: Path, run_dir: Path, stages: list[Stage] | No
             lock.release()
     finally:
         if comm is not None:
-            comm.bcast(("end",), root=0)
+            _send(comm, _END)
     return summary
 
 
@@ -261,7 +261,7 @@ def _run_stage(stage, case, case_dir, run_dir, func, status, summary, hashes, co
         log, handler = _stage_logger(part, stage)
         LOG.info("stage %s: running → %s", stage.value, stage_dir(run_dir, stage.value))
         if distributed:
-            comm.bcast(("stage", stage.value, str(part)), root=0)
+            _send(comm, STAGE_ORDER.index(stage))
         section = func(StageContext(case, case_dir, run_dir, part, log, comm))
         log.removeHandler(handler)
         handler.close()
@@ -326,19 +326,43 @@ def _translate(stage, err, run_dir, status) -> BaseException:
     return err
 
 
+_END = -1
+"""Command from rank 0: the run is over (else the index of a distributed stage to run)."""
+
+
+def _send(comm, command: int) -> None:
+    import numpy as np
+
+    comm.Ibcast(np.array([command], dtype=np.int64), root=0).Wait()
+
+
+def _receive(comm) -> int:
+    """Wait for rank 0's next command without busy-polling a core (a blocking MPI broadcast
+    spins at 100 % CPU while rank 0 runs deploy and collide alone)."""
+    import numpy as np
+
+    buf = np.empty(1, dtype=np.int64)
+    req = comm.Ibcast(buf, root=0)
+    while not req.Test():
+        time.sleep(0.02)
+    return int(buf[0])
+
+
 def _follow(comm, case, case_dir, run_dir: Path, funcs) -> dict:
-    """Ranks > 0: wait for rank 0 to start a distributed stage, run it, repeat until the end.
-    They never create, lock, rename or delete anything in the run directory."""
+    """Ranks > 0: wait for rank 0 to start a distributed stage, run it in the folder rank 0
+    created, repeat until the end. They never create, lock, rename or delete anything in the
+    run directory."""
     while True:
-        msg = comm.bcast(None, root=0)
-        if msg[0] == "end":
+        command = _receive(comm)
+        if command == _END:
             return {}
-        _, name, part = msg
-        stage = Stage(name)
+        stage = STAGE_ORDER[command]
+        log = logging.getLogger(f"flexnet.{stage.value}")
         try:
-            funcs[stage](StageContext(case, case_dir, run_dir, Path(part), logging.getLogger(f"flexnet.{name}"), comm))
+            funcs[stage](StageContext(case, case_dir, run_dir, partial_dir(run_dir, stage.value), log, comm))
         except BaseException as err:  # one line, then end every rank (they may sit in a collective)
-            print(f"flexnet: error: rank {comm.rank}, stage {name}: {err or type(err).__name__}", file=sys.stderr)
+            print(f"flexnet: error: rank {comm.rank}, stage {stage.value}: {err or type(err).__name__}",
+                  file=sys.stderr)
             comm.Abort(getattr(err, "exit_code", 1))
 
 
