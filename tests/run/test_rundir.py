@@ -219,3 +219,19 @@ def test_lock_refuses_the_same_process_twice(tmp_path):
         with pytest.raises(RunDirError, match="in use by another run"):
             RunLock(tmp_path).acquire()
     RunLock(tmp_path).acquire().release()
+
+
+def test_read_only_output_folder(tmp_path):
+    """A read-only --out: one line with the path and EROFS, exit 74, no traceback."""
+    mnt = tmp_path / "ro"
+    mnt.mkdir()
+    r = subprocess.run(["mount", "-t", "tmpfs", "-o", "ro,size=100k", "tmpfs", str(mnt)], capture_output=True)
+    if r.returncode != 0:
+        pytest.skip("cannot mount a read-only tmpfs here")
+    try:
+        r = run_cli("run", ROOT / "cases/traction_deploy", "--out", mnt / "run", *TINY_DEPLOY, "--force")
+        assert r.returncode == 74
+        assert one_error_line(r.stderr).endswith(f"{mnt / 'run'}: Read-only file system (EROFS) while creating "
+                                                 "the run directory")
+    finally:
+        subprocess.run(["umount", str(mnt)])
