@@ -32,7 +32,11 @@ def setup_logging(level: int = logging.INFO) -> None:
     log = logging.getLogger("flexnet")
     log.setLevel(level)
     log.propagate = False
-    if not log.handlers:
-        h = logging.StreamHandler(sys.stderr)
-        h.setFormatter(logging.Formatter("%(levelname)s %(name)s: %(message)s"))
-        log.addHandler(h)
+    console = [h for h in log.handlers if getattr(h, "flexnet_console", False)]
+    if console:  # called again in one process (tests, workers): follow the current sys.stderr
+        console[0].stream = sys.stderr  # (setStream would flush the old, maybe closed, stream)
+        return
+    h = logging.StreamHandler(sys.stderr)
+    h.flexnet_console = True
+    h.setFormatter(logging.Formatter("%(levelname)s %(name)s: %(message)s"))
+    log.addHandler(h)
