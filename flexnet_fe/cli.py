@@ -162,13 +162,17 @@ def cmd_status(args) -> int:
     from flexnet_fe.errors import RunDirError
     from flexnet_fe.io import read_json
     from flexnet_fe.pipeline import stale_running
-    from flexnet_fe.runs import STATUS
+    from flexnet_fe.runs import RESOLVED, STATUS
 
     path = Path(args.run_dir) / STATUS
     if not path.is_file():
         raise RunDirError(f"{args.run_dir}: not a run directory (no {STATUS})")
     dead = set(stale_running(args.run_dir))
+    resolved = Path(args.run_dir) / RESOLVED
+    wanted = read_json(resolved)["case"]["case"]["stages"] if resolved.is_file() else None
     for name, rec in read_json(path)["stages"].items():
+        if wanted is not None and name not in wanted and rec.get("state", "pending") == "pending":
+            continue  # a stage this case does not have
         state = rec.get("state", "?")
         extra = rec.get("error") or rec.get("stale_reason") or ""
         if name in dead:
