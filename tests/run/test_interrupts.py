@@ -88,13 +88,19 @@ def test_sigint_in_shell_after_gmsh(tmp_path):
 
     from test_mpi_run import RADAR, fake_collide
 
-    small = ["missile.mesh_size=0.05", "shell.end_time=0.05", 'collide.net_source="flat_taut"']
+    small = ["missile.mesh_size=0.05", "shell.end_time=1.0", 'collide.net_source="flat_taut"']
     case, case_dir = load_case(RADAR, small)
     run = tmp_path / "run"
     run_case(case, case_dir, run, [Stage.collide], stage_funcs={Stage.collide: fake_collide})
     proc = start_cli("run", RADAR, "--out", run, "--stages", "shell", *[a for s in small for a in ("--set", s)])
     wait_for_state(run, "shell", "running", proc)
-    time.sleep(3.0)  # past the meshing (gmsh), into the solver
+    log = run / ".shell.partial" / "log.txt"
+    end = time.monotonic() + 120
+    while time.monotonic() < end and proc.poll() is None:  # past the meshing (gmsh), into the solver
+        if log.is_file() and "steps to" in log.read_text():
+            break
+        time.sleep(0.05)
+    time.sleep(0.5)
     rc, err = interrupt(proc, signal.SIGINT)
     assert rc == 130, err
     assert err.strip().splitlines()[-1].startswith("flexnet: interrupted during shell;"), err
