@@ -109,8 +109,10 @@ def _unit_notes(run: RunData, notes: list[str]) -> None:
                              + " (shown with '?'; add it to flexnet_fe/report/units.py)")
 
 
-def build_report(run_dir: Path) -> Path:
+def build_report(run_dir: Path, *, pictures: bool = True) -> Path:
     """Write ``run_dir/report.html`` from the run directory's files; return its path.
+    ``pictures=False`` leaves out the 3-D pictures (offscreen VTK in a child process, the
+    slow part); the plots, tables, energy report and ParaView files are still written.
 
     Raises :class:`FlexnetError` when ``run_dir`` is not a run directory. Pictures go to
     ``run_dir/report_files/`` (deleted and rebuilt on every call); all images are referenced
@@ -132,7 +134,7 @@ def build_report(run_dir: Path) -> Path:
     _unit_notes(run, notes)
     energy = energy_report(run.run_dir, [s.name for s in run.stages], out_dir, notes)
     warnings = list(verdict.warnings) + _energy_warnings(run, energy)
-    top = assemble_figures(run, verdict, stages, out_dir, notes)
+    top = assemble_figures(run, verdict, stages, out_dir, notes, pictures)
     meta = run.case.get("case", {}) or {}
     env = Environment(loader=FileSystemLoader(Path(__file__).parent / "templates"),
                       autoescape=select_autoescape(["html", "j2"]), undefined=StrictUndefined,

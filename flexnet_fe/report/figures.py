@@ -202,8 +202,9 @@ def _paraview(run: RunData, fins: list[str], verdict: Verdict, out_dir: Path, no
 
 
 def assemble_figures(run: RunData, verdict: Verdict, stages: list[dict], out_dir: Path,
-                     notes: list[str]) -> dict[str, Any]:
-    """Make every figure (module doc); returns the top-of-report figures."""
+                     notes: list[str], pictures: bool = True) -> dict[str, Any]:
+    """Make every figure (module doc); returns the top-of-report figures. ``pictures=False``
+    skips the 3-D pictures (no child process; each is listed as not rendered)."""
     top: dict[str, Any] = {"missile": None, "net": None, "animation": None, "paraview": None}
     views = {v["info"].name: v for v in stages}
     jobs: list[dict] = []
@@ -226,7 +227,8 @@ def assemble_figures(run: RunData, verdict: Verdict, stages: list[dict], out_dir
                                                           "tension [N]."))
     from flexnet_fe.report.pictures import render_isolated
 
-    for callback, result in zip(later, render_isolated(jobs)):
+    results = render_isolated(jobs) if pictures else ["not rendered (pictures=False)"] * len(jobs)
+    for callback, result in zip(later, results):
         callback(result)
     return top
 

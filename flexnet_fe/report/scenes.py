@@ -247,21 +247,23 @@ def render_animation(net_pvd: str, missile_pvd: str, gif: str, fps: float = 6.0)
     tmax = max((float(np.max(m.cell_data["tension_n"])) for _, m in meshes
                 if m.n_cells and "tension_n" in m.cell_data), default=0.0)
     frames = []
-    for t, net in meshes:
-        key = min(mis, key=lambda s: abs(s - t))
-        pl = pv.Plotter(off_screen=True, window_size=[900, 700])
-        try:
+    pl = pv.Plotter(off_screen=True, window_size=[900, 700])   # one window, meshes replaced by name
+    try:
+        for t, net in meshes:
+            key = min(mis, key=lambda s: abs(s - t))
             if net.n_cells:
                 colour = "tension_n" in net.cell_data and tmax > 0
                 pl.add_mesh(net, scalars="tension_n" if colour else None, color=None if colour else "black",
-                            cmap="viridis", clim=[0.0, tmax] if colour else None, line_width=1.5,
+                            cmap="viridis", clim=[0.0, tmax] if colour else None, line_width=1.5, name="net",
                             scalar_bar_args={"title": "rope tension [N]", "fmt": "%.3g"})
-            pl.add_mesh(pv.read(str(mis[key])), color="black", line_width=2.0)
-            pl.add_text(f"collision, t = {t * S_TO_MS:.3f} ms", font_size=12)
+            else:
+                pl.remove_actor("net")
+            pl.add_mesh(pv.read(str(mis[key])), color="black", line_width=2.0, name="missile")
+            pl.add_text(f"collision, t = {t * S_TO_MS:.3f} ms", font_size=12, name="time")
             _side_camera(pl, centre, flight, 0.4 * (path_len + length) + 0.5)
             frames.append(pl.screenshot(return_img=True))
-        finally:
-            pl.close()
+    finally:
+        pl.close()
     Path(gif).parent.mkdir(parents=True, exist_ok=True)
     imageio.mimsave(gif, frames, duration=1000.0 / fps, loop=0)
     return len(frames)

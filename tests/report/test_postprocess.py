@@ -35,6 +35,8 @@ def test_show_stress_envelope(tmp_path):
 def test_show_stress_missing_files_is_an_error(tmp_path):
     run = make_run(tmp_path / "run", xdmf=False)
     p = _run("show_stress.py", run)
+    assert p.returncode == 2 and "no fin folders" in p.stderr     # fin folders hold XDMF files
+    p = _run("show_stress.py", run, "--fin", "wing_1")
     assert p.returncode == 1 and "no such file" in p.stderr
 
 
