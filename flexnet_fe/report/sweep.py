@@ -90,13 +90,33 @@ def case_field(key: str):
     return info
 
 
-def parameter_label(key: str) -> str:
-    """Axis label of a case field: its name and the ``[unit]`` from its schema description."""
+def parameter_unit(key: str) -> str:
+    """The SI unit of a case field, from the ``[unit]`` of its schema description ('' if none)."""
     info = case_field(key)
     desc = (info.description or "") if info is not None else ""
     if "[" in desc and "]" in desc:
-        return f"{key} {desc[desc.rindex('['):desc.rindex(']') + 1]}"
-    return key
+        return desc[desc.rindex("[") + 1:desc.rindex("]")]
+    return ""
+
+
+def parameter_label(key: str, unit: str | None = None) -> str:
+    """Axis label of a case field: its name and its unit (``unit``, else the schema's)."""
+    u = parameter_unit(key) if unit is None else unit
+    return f"{key} [{u}]" if u else key
+
+
+def parameter_axis(key: str, peak_abs: float):
+    """Display unit of a swept parameter's axis: the schema's SI unit with an SI prefix that
+    fits ``peak_abs`` (a rope diameter of 0.004 m is drawn in mm)."""
+    from flexnet_fe.report.units import PREFIXABLE, PREFIXES, Unit
+
+    base = parameter_unit(key)
+    if base not in PREFIXABLE or not peak_abs > 0 or not math.isfinite(peak_abs):
+        return Unit(base)
+    for factor, prefix in reversed(PREFIXES):
+        if peak_abs >= factor:
+            return Unit(prefix + base, 1.0 / factor)
+    return Unit("n" + base, 1e9)
 
 
 def _number(text: str) -> float | None:
@@ -205,22 +225,29 @@ def _plot_parameter(cols: list[tuple[Column, str]], param: str, others: list[str
     nrow = math.ceil(n / ncol)
     fig, axes = plt.subplots(nrow, ncol, figsize=(4.6 * ncol, 3.4 * nrow), squeeze=False)
     drawn = {}
+    from matplotlib.ticker import MaxNLocator
+
     for ax, (col, title) in zip(axes.ravel(), cols):
         groups, numeric_x, categories = _series(col, param, others, rows)
         peak = max((abs(y) for pts in groups.values() for _, y in pts), default=0.0)
         unit = axis_unit(col.name, peak) if not col.boolean else None
+        xu = parameter_axis(param, max((abs(x) for pts in groups.values() for x, _ in pts), default=0.0)) \
+            if numeric_x else None
         for key, pts in groups.items():
             xs, ys = zip(*pts)
+            xs = [x * xu.scale for x in xs] if xu else xs
             ys = [y * (unit.scale if unit else 1.0) for y in ys]
             ax.plot(xs, ys, "o-", label=", ".join(f"{o} = {v}" for o, v in key) or None)
         drawn[col.name] = sum(len(p) for p in groups.values())
-        xs_all = [x for pts in groups.values() for x, _ in pts]
+        xs_all = [x * (xu.scale if xu else 1.0) for pts in groups.values() for x, _ in pts]
         if numeric_x and xs_all and min(xs_all) > 0 and max(xs_all) / min(xs_all) > 100:
             ax.set_xscale("log")
             plain_log_axis(ax.xaxis)
         if not numeric_x:
             ax.set_xticks(range(len(categories)), categories, rotation=30, ha="right")
-        ax.set_xlabel(parameter_label(param), fontsize=8)
+        elif ax.get_xscale() == "linear":
+            ax.xaxis.set_major_locator(MaxNLocator(5))
+        ax.set_xlabel(parameter_label(param, xu.label if xu else None), fontsize=8)
         ax.set_ylabel(title if col.boolean else f"{title} [{unit.label}]", fontsize=8)
         ax.set_title(col.name, fontsize=8)
         if col.boolean:
