@@ -156,8 +156,10 @@ def _fin_names(run: RunData, stage) -> list[str]:
     return fins
 
 
-def _fin_picture_job(run: RunData, fin: str, res: dict, out_dir: Path) -> tuple[dict | None, str]:
+def _fin_picture_job(run: RunData, fin: str, res: dict, out_dir: Path,
+                     allowable_pa: float | None = None) -> tuple[dict | None, str]:
     fin_dir = run.run_dir / "shell" / fin
+    title = f"fin {fin}" + (f" (allowable {allowable_pa * PA_TO_MPA:.4g} MPa)" if allowable_pa else "")
     envelope, fields = fin_dir / "envelope.xdmf", fin_dir / "fields.xdmf"
     png = str(out_dir / f"shell_{fin}_von_mises.png")
     loc, vm, t = res.get("peak_location_m"), res.get("peak_von_mises_pa"), res.get("peak_time_s")
@@ -165,10 +167,10 @@ def _fin_picture_job(run: RunData, fin: str, res: dict, out_dir: Path) -> tuple[
             if isinstance(loc, list) and len(loc) == 3 and isinstance(vm, (int, float)) and isinstance(t, (int, float))
             else None)
     if envelope.is_file():
-        return ({"kind": "stress", "args": {"xdmf": str(envelope), "png": png, "title": f"fin {fin}", "mark": mark}},
+        return ({"kind": "stress", "args": {"xdmf": str(envelope), "png": png, "title": title, "mark": mark}},
                 "peak over time of the cell von Mises stress (envelope.xdmf)")
     if fields.is_file():
-        return ({"kind": "stress", "args": {"xdmf": str(fields), "png": png, "time_s": t, "title": f"fin {fin}",
+        return ({"kind": "stress", "args": {"xdmf": str(fields), "png": png, "time_s": t, "title": title,
                                             "mark": mark}},
                 "von Mises stress at the field output time nearest the peak (fields.xdmf)")
     return None, "no envelope.xdmf or fields.xdmf for this fin"
@@ -255,9 +257,10 @@ def _shell_jobs(run, view, verdict, out_dir, notes, jobs, later, top) -> None:
         view["figures"].append(Figure(plot, "Largest von Mises (left) and maximum principal (right) stress over "
                                             "each fin vs time, from shell/<fin>/history.csv; red dashed: allowable; "
                                             "dots: the summary's peaks."))
+    allowables = {f.name: f.allowable_pa for f in verdict.fins}
     for fin in fins:
         res = summary_fins.get(fin, {})
-        job, what = _fin_picture_job(run, fin, res, out_dir)
+        job, what = _fin_picture_job(run, fin, res, out_dir, allowables.get(fin))
         if job is None:
             view["pictures"].append((fin, None, what))
             continue
