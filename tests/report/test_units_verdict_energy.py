@@ -96,3 +96,41 @@ def test_energy_classes_and_balance():
     assert tab.balance_from == "energy_balance_j"
     np.testing.assert_allclose(tab.balance_j, 0.5 * t)
     assert energy_table("x", {"t_s": t, "area_m2": t}) is None
+
+
+def test_new_contract_keys_in_the_verdict(tmp_path):
+    """The keys the rewritten stages add (brief: window-free collide keys, CFC peak, per-fin
+    allowable, nested warnings, stage energy balance) are shown, not crashed on."""
+    from flexnet_fe.io import atomic_write_json, write_history_csv
+    from flexnet_fe.report import build_report
+
+    from .synthetic import parse_html
+
+    run = tmp_path / "run"
+    atomic_write_json(run / "resolved.json", {"case": {"case": {"name": "n", "stages": ["collide", "shell"]},
+                                                       "collide": {"impact_speed": 500.0}}})
+    atomic_write_json(run / "status.json", {"case": "n", "stages": {"collide": {"state": "done"},
+                                                                    "shell": {"state": "done"}}})
+    atomic_write_json(run / "summary.json", {
+        "collide": {"peak_accel_mps2": 700.0, "cfc": 1000, "delta_v_mps": 0.0381, "delta_v_axis_mps": [0.038, 0, 0],
+                    "impulse_ns": 8.8, "fin_impulse_ns": {"wing_1": 3.9}, "contact_duration_s": 0.0081,
+                    "passed_through": False, "energy_error_rel": 0.01, "warnings": []},
+        "shell": {"wing_1": {"peak_von_mises_pa": 400e6, "peak_time_s": 3e-3, "peak_location_m": [0, 0, 0],
+                             "peak_max_principal_pa": 410e6, "allowable_pa": 450e6, "peak_error_estimate_rel": 0.02,
+                             "warnings": ["peak at a re-entrant corner"]}}})
+    t = np.linspace(0, 1e-3, 5)
+    write_history_csv(run / "collide" / "history.csv", {"t_s": t, "missile_kinetic_j": 100 - t * 1e4,
+                                                        "net_kinetic_j": t * 1e4, "energy_balance_j": 1e-3 * t})
+    html = build_report(run, pictures=False).read_text()
+    tree = parse_html(html)
+    missile = {r[0]: r[1:] for r in tree.tables["verdict-missile"][1:]}
+    assert missile["Δv of the missile"][0] == "0.0381 m/s"
+    assert "CFC 1000 filtered" in missile["peak CG acceleration"][1]
+    assert missile["impulse on the missile"][0] == "8.8 N·s"
+    assert missile["contact duration"][0] == "0.0081 s"
+    assert missile["net"][0] == "captured / carried forward"
+    fin = dict(zip(tree.tables["verdict-fins"][0], tree.tables["verdict-fins"][1]))
+    assert fin["allowable from"] == "shell summary allowable_pa" and fin["verdict"] == "PASS"
+    assert "peak at a re-entrant corner (wing_1)" in html            # nested warning in the box
+    energy = {r[0]: r for r in tree.tables["energy-table"][1:]}
+    assert energy["collide"][1] == "energy_balance_j"                 # the stage's own balance
