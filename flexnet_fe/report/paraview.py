@@ -16,9 +16,8 @@ Writes into ``out_dir`` (``run_dir/report_files/paraview/``):
     (from ``shell/<fin>/envelope.xdmf``) plus the body; no time.
 ``missile_times.csv``
     Each merged output time [s] and, per fin, the time of the fin's own output shown there
-    (fins run with their own stable step, so their output times differ by a few µs; times
-    closer than :data:`MERGE_FRACTION` of the smallest output interval are merged, the fin's
-    nearest output is shown at each merged time).
+    (fins run with their own stable step, so their output times drift apart by a few µs per
+    output; :func:`merge_outputs` groups them into frames).
 ``open_missile.py``
     A ``pvpython`` / ``paraview --script`` script that opens ``missile.xdmf`` coloured by
     ``von_mises_pa`` (range 0 … envelope maximum), warped by the displacement, at the time of
@@ -39,9 +38,9 @@ import numpy as np
 from flexnet_fe.errors import FlexnetError
 from flexnet_fe.report.xdmf import list_fields, nearest_time_index, read_field, read_mesh
 
-MERGE_FRACTION = 0.25
-"""Output times of different fins closer than this fraction of the smallest output interval
-are one merged time."""
+MERGE_FRACTION = 0.5
+"""Output times of different fins closer than this fraction of the smallest median output
+interval are one merged frame (so no fin is shown more than half an interval away)."""
 
 DISPLACEMENT = "displacement_m"
 SURFACE_STRESS = tuple(f"{m}_{s}_pa" for m in ("von_mises", "max_principal") for s in ("top", "mid", "bottom"))
@@ -94,17 +93,27 @@ def read_body(msh: Path) -> Part:
     return Part("body", x, np.vstack(tri + split), "Triangle")
 
 
-def merged_times(per_fin: dict[str, tuple[float, ...]]) -> list[float]:
-    """Union of the fins' output times [s], times closer than MERGE_FRACTION × the smallest
-    output interval taken as one (the earliest fin's value kept)."""
-    steps = [np.diff(t) for t in per_fin.values() if len(t) > 1]
-    spacing = min((float(s[s > 0].min()) for s in steps if np.any(s > 0)), default=0.0)
-    tol = MERGE_FRACTION * spacing
-    out: list[float] = []
-    for t in sorted({float(t) for ts in per_fin.values() for t in ts}):
-        if not out or t - out[-1] > tol:
-            out.append(t)
-    return out
+def merge_outputs(per_fin: dict[str, tuple[float, ...]]) -> list[tuple[float, dict[str, int]]]:
+    """Group the fins' output times [s] into merged frames: walking the union in time order, a
+    time joins the current group when it lies within MERGE_FRACTION × the smallest typical
+    (median) output interval of the group's first time AND its fin has no output in the group
+    yet (a fin's own frames, e.g. its peak-time frame, are never merged away). Returns
+    ``[(group time = its earliest time, {fin: output index of every fin})]``; a fin without an
+    output in a group shows its output nearest to the group time."""
+    medians = [float(np.median(np.diff(sorted(t)))) for t in per_fin.values() if len(t) > 1]
+    tol = MERGE_FRACTION * min((m for m in medians if m > 0), default=0.0)
+    events = sorted((float(t), name, k) for name, ts in per_fin.items() for k, t in enumerate(ts))
+    groups: list[tuple[float, dict[str, int]]] = []
+    for t, name, k in events:
+        if groups and t - groups[-1][0] <= tol and name not in groups[-1][1]:
+            groups[-1][1][name] = k
+        else:
+            groups.append((t, {name: k}))
+    for t, members in groups:
+        for name, ts in per_fin.items():
+            if name not in members:
+                members[name] = int(np.argmin(np.abs(np.asarray(ts) - t)))
+    return groups
 
 
 class _H5:
@@ -204,16 +213,17 @@ def write_missile_files(shell_dir: Path, fins: list[str], out_dir: Path, notes: 
     except (FlexnetError, ValueError, OSError) as err:
         notes.append(f"ParaView missile file: no body ({err})")
         body = None
-    times = merged_times({f.part.name: f.times for f in read})
+    groups = merge_outputs({f.part.name: f.times for f in read})
+    times = [t for t, _ in groups]
     xdmf = out_dir / "missile.xdmf"
     h5 = _H5(out_dir / "missile.h5")
     chosen: dict[str, list[float]] = {f.part.name: [] for f in read}
     try:
         grids = []
-        for k, t in enumerate(times):
+        for k, (t, members) in enumerate(groups):
             blocks = []
             for fin in read:
-                i = nearest_time_index(fin.times, t)
+                i = members[fin.part.name]
                 chosen[fin.part.name].append(fin.times[i])
                 blocks.append(_grid(h5, fin.part, _fin_attributes(fin, i, f"data/{fin.part.name}/{i}")))
             if body is not None:
@@ -279,8 +289,9 @@ displacement x {warp:g}; time set to the largest peak ({peak}). Frame: missile b
 import os
 import sys
 
+import paraview
 from paraview.simple import (ColorBy, GetActiveViewOrCreate, GetAnimationScene, GetColorTransferFunction,
-                             Render, SaveScreenshot, Show, WarpByVector, XDMFReader)
+                             Render, SaveScreenshot, Show, Text, WarpByVector, XDMFReader)
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 reader = XDMFReader(registrationName="missile", FileNames=[os.path.join(HERE, "missile.xdmf")])
@@ -297,9 +308,21 @@ display.SetScalarBarVisibility(view, True)
 scene = GetAnimationScene()
 scene.UpdateAnimationUsingDataTimeSteps()
 {set_time}
+# oblique view from above (the horizontal fins face-on, the vertical ones at an angle), z up
+x0, x1, y0, y1, z0, z1 = warp.GetDataInformation().GetBounds()
+centre = [(x0 + x1) / 2, (y0 + y1) / 2, (z0 + z1) / 2]
+size = max(x1 - x0, y1 - y0, z1 - z0)
+view.CameraFocalPoint = centre
+view.CameraPosition = [centre[0] + 0.6 * size, centre[1] - 0.6 * size, centre[2] + 1.3 * size]
+view.CameraViewUp = [0.0, 0.0, 1.0]
 view.ResetCamera()
+label = Text(registrationName="label")
+label.Text = "von Mises stress [Pa], max over top/mid/bottom; {peak}; displacement x{warp:g}; frame B [m]"
+label_display = Show(label, view)
+label_display.FontSize = 10
+label_display.WindowLocation = "Upper Left Corner"
 Render(view)
-if __name__ == "__main__" and "pvpython" in os.path.basename(sys.executable):
+if not getattr(paraview, "fromGUI", False):  # pvpython / pvbatch: save a picture
     SaveScreenshot(sys.argv[1] if len(sys.argv) > 1 else "missile_von_mises.png", view,
                    ImageResolution=[1600, 900])
 '''

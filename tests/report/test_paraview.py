@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from flexnet_fe.report.paraview import SURFACE_STRESS, merged_times, write_missile_files
+from flexnet_fe.report.paraview import SURFACE_STRESS, merge_outputs, write_missile_files
 
 from .synthetic import DISP_RATE, ENVELOPE_VM_PA, FIELD_TIMES_S, RUDDER_VM_PA, make_run
 
@@ -74,8 +74,69 @@ def test_envelope_file_and_script(files):
     assert "scene.AnimationTime = 0.002" in text
 
 
-def test_merged_times():
-    # two fins with their own steps: times within a quarter of the smallest interval merge
+def test_merge_outputs():
+    # two fins with their own steps (b drifts by 1 % per output) and a peak-time frame of b at
+    # 1.45 ms: times within half the smallest median interval (0.5 ms) share a frame, but a fin's
+    # own frames are never merged (b's 1.45 ms frame and its 2.02 ms frame stay apart)
     a = (0.0, 1.0e-3, 2.0e-3)
-    b = (0.0, 1.01e-3, 2.02e-3, 1.5e-3)
-    assert merged_times({"a": a, "b": b}) == [0.0, 1.0e-3, 1.5e-3, 2.0e-3]
+    b = (0.0, 1.01e-3, 1.45e-3, 2.02e-3)
+    groups = merge_outputs({"a": a, "b": b})
+    assert [t for t, _ in groups] == [0.0, 1.0e-3, 1.45e-3, 2.0e-3]
+    assert [g for _, g in groups] == [{"a": 0, "b": 0}, {"a": 1, "b": 1}, {"b": 2, "a": 1}, {"a": 2, "b": 3}]
+
+
+PV_CHECK = r'''
+import json, sys
+from paraview.simple import XDMFReader, servermanager
+r = XDMFReader(FileNames=[sys.argv[1]])
+r.UpdatePipelineInformation()
+times = list(r.TimestepValues)
+r.UpdatePipeline(times[-1])
+d = servermanager.Fetch(r)
+blocks = {}
+for k in range(d.GetNumberOfBlocks()):
+    b = d.GetBlock(k)
+    cd, pd = b.GetCellData(), b.GetPointData()
+    blocks[d.GetMetaData(k).Get(d.NAME()).split("[")[0]] = {
+        "cells": b.GetNumberOfCells(),
+        "cell": [cd.GetArrayName(i) for i in range(cd.GetNumberOfArrays())],
+        "point": [pd.GetArrayName(i) for i in range(pd.GetNumberOfArrays())],
+        "vm_max": cd.GetArray("von_mises_pa").GetRange()[1] if cd.GetArray("von_mises_pa") else None}
+print("RESULT" + json.dumps({"times": times, "blocks": blocks}))
+'''
+
+
+def _pvpython():
+    import os
+    import shutil
+
+    return os.environ.get("FLEXNET_PVPYTHON") or shutil.which("pvpython")
+
+
+@pytest.mark.skipif(not _pvpython(), reason="no ParaView pvpython (postprocess/paraview_sandbox.sh makes one; "
+                                            "set FLEXNET_PVPYTHON)")
+def test_paraview_reads_the_missile_file(files, tmp_path):
+    """ParaView's own XDMF reader (pvpython) sees the same blocks, times and fields, and the
+    pvpython script renders a picture."""
+    import json
+    import subprocess
+
+    from PIL import Image
+
+    check = tmp_path / "check.py"
+    check.write_text(PV_CHECK)
+    p = subprocess.run([_pvpython(), str(check), str(files.xdmf)], capture_output=True, text=True, timeout=180)
+    line = next((ln for ln in p.stdout.splitlines() if ln.startswith("RESULT")), None)
+    assert line, p.stdout[-2000:] + p.stderr[-2000:]
+    got = json.loads(line[len("RESULT"):])
+    assert got["times"] == pytest.approx(list(FIELD_TIMES_S), abs=0.0)
+    assert set(got["blocks"]) == {*FINS, "body"}
+    for fin in FINS:
+        b = got["blocks"][fin]
+        assert "displacement_m" in b["point"] and {"von_mises_pa", *SURFACE_STRESS} <= set(b["cell"])
+        assert b["vm_max"] == PEAKS[fin].max()                 # at the last time: peak · 1
+    png = tmp_path / "pv.png"
+    p = subprocess.run([_pvpython(), str(files.script), str(png)], capture_output=True, text=True, timeout=180)
+    assert png.is_file(), p.stderr[-2000:]
+    with Image.open(png) as im:
+        assert np.asarray(im.convert("L"), dtype=float).std() > 1.0
