@@ -79,12 +79,17 @@ def _log_tail(stage: StageInfo) -> str | None:
 
 
 def _case_tables(case: dict) -> list[tuple[str, list[Row]]]:
-    """Every table of the resolved case as rows (values as resolved, SI, no unit conversion)."""
+    """Every table of the resolved case as rows (values as resolved, SI, no unit conversion),
+    each with the unit its schema description gives (``[m]`` ...; '' when it names none)."""
+    from flexnet_fe.report.sweep import parameter_unit
+
     out = []
     for table, body in case.items():
         if table == "case" or not isinstance(body, dict):
             continue
-        out.append((table, [Row(k, format_value(v), "") for k, v in flatten(body).items()]))
+        out.append((table, [Row(k, format_value(v), parameter_unit(f"{table}.{k}") if v is not None
+                                and not isinstance(v, (bool, str)) else "")
+                            for k, v in flatten(body).items()]))
     return out
 
 

@@ -214,7 +214,8 @@ def render_net_events(net_pvd: str, missile_pvd: str, png: str, events: list[lis
                 pl.add_mesh(net, scalars="tension_n" if colour else None, color=None if colour else "black",
                             cmap="viridis", clim=[0.0, tmax] if colour else None, line_width=1.5,
                             show_scalar_bar=colour and k == len(frames) - 1,
-                            scalar_bar_args={"title": "rope tension [N]", "fmt": "%.3g"})
+                            scalar_bar_args={"title": "rope tension [N]", "fmt": "%.3g", "vertical": True,
+                                             "position_x": 0.82, "position_y": 0.25, "height": 0.5})
             pl.add_mesh(mis, color="black", line_width=2.0)
             pl.add_text(f"{label}\nt = {tn * S_TO_MS:.4g} ms", font_size=11)
             _side_camera(pl, centre, flight, 0.6 * length + NET_CROP_M * 0.5)
