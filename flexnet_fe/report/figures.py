@@ -100,9 +100,12 @@ def collide_plot(run: RunData, out_dir: Path, notes: list[str]) -> str | None:
     section = (run.summary or {}).get("collide") or {}
     t = h["t_s"] * TIME_AXIS.scale
     fig, (ax, bx) = plt.subplots(1, 2, figsize=(12, 4.2))
-    if "accel_mag_mps2" in h:
-        au = axis_unit("accel_mps2", float(np.nanmax(np.abs(h["accel_mag_mps2"]), initial=0.0)))
-        ax.plot(t, h["accel_mag_mps2"] * au.scale, lw=1.0, label="|a| (mean over each output interval)")
+    acc = [c for c in h if c.startswith("accel_mag") and c.endswith("_mps2")]   # raw and filtered
+    if acc:
+        au = axis_unit("accel_mps2", max(float(np.nanmax(np.abs(h[c]), initial=0.0)) for c in acc))
+        for c in acc:
+            ax.plot(t, h[c] * au.scale, lw=1.0,
+                    label="|a| (mean over each output interval)" if c == "accel_mag_mps2" else c)
         pk, pt = section.get("peak_accel_mps2"), section.get("peak_accel_time_s")
         if isinstance(pk, (int, float)) and isinstance(pt, (int, float)):
             cfc = section.get("cfc")

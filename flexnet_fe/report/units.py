@@ -164,8 +164,8 @@ def with_unit(value, unit: Unit) -> str:
 PREFIXES = ((1e-9, "n"), (1e-6, "µ"), (1e-3, "m"), (1.0, ""), (1e3, "k"), (1e6, "M"), (1e9, "G"))
 """SI prefixes :func:`axis_unit` may choose."""
 
-PREFIXABLE = frozenset({"m", "s", "N", "J", "Pa", "rad", "N·s", "W", "m/s", "m/s²", "rad/s"})
-"""Base units that take an SI prefix on a plot axis (not m², kg/m³, ...)."""
+PREFIXABLE = frozenset({"m", "s", "N", "J", "Pa", "rad", "N·s", "W", "m/s", "rad/s"})
+"""Base units that take an SI prefix on a plot axis (not m², kg/m³, m/s² — km/s² reads oddly)."""
 
 
 def axis_unit(key: str, peak_abs: float) -> Unit:
