@@ -27,7 +27,9 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--out", type=Path, help="output folder (default RUN_DIR/postprocess)")
     a = p.parse_args(argv)
     shell = a.run_dir / "shell"
-    fins = a.fin or sorted(d.name for d in shell.glob("*") if d.is_dir())
+    # fin folders are those holding the shell stage's XDMF output (shell/meshes/ is not a fin)
+    fins = a.fin or sorted(d.name for d in shell.glob("*") if d.is_dir()
+                           and ((d / "envelope.xdmf").exists() or (d / "fields.xdmf").exists()))
     if not fins:
         print(f"show_stress: no fin folders in {shell}", file=sys.stderr)
         return 2

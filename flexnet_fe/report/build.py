@@ -1,47 +1,45 @@
-"""``build_report(run_dir)``: one run directory → ``run_dir/report.html`` (DESIGN.md §3, item 5).
+"""``build_report(run_dir)``: one run directory → ``run_dir/report.html`` (DESIGN.md §3, issue 12).
 
 The report is built on the run-directory contract only (resolved.json, status.json,
-summary.json, ``<stage>/`` files), never on a stage's internals:
+summary.json, ``<stage>/`` files), never on a stage's internals. From the top:
 
-- the case (name, description, stages, every resolved table, versions, case hash);
-- the stage status table: a failed stage is shown failed with its error and the tail of its
-  log; a stage is shown complete only when status.json says ``done`` AND summary.json has its
-  section;
-- headline numbers of each complete stage with units (from the key suffixes);
-- the shell stress table per fin (peak von Mises [MPa], time, location in frame B, peak maximum
-  principal stress, ratio to the fin material's yield strength from ``case.missile.material``);
-- every PNG below each stage folder, referenced relatively;
-- the peak von Mises history of each fin (from ``shell/<fin>/history.csv``) and a stress picture
-  per fin rendered offscreen from ``shell/<fin>/envelope.xdmf`` (else ``fields.xdmf`` at the
-  output time nearest the peak), written into ``run_dir/report_files/``.
+1. **Warnings** (red box): every warning any stage logged (:mod:`.verdict`).
+2. **Verdict**: PASS / FAIL / INCOMPLETE; per fin peak von Mises and max principal with time,
+   location, error estimate, allowable (and its source), margin of safety and PASS/FAIL; the
+   missile's Δv, peak acceleration (filtered or not, said), pass-through; the flight outcome.
+3. **Pictures**: the whole missile's stress (envelope and at the largest peak), the net at
+   first contact / mid-passage / exit, the collision animation (GIF), the ParaView files.
+4. Notes (what was missing or inconsistent), the stage status table, the energy report.
+5. One section per stage: headline numbers with units (:mod:`.units`), stress histories with
+   the allowable drawn, per-fin pictures with the peak marked, the stage's own PNGs.
+6. The resolved case.
 
-Missing optional files are listed as notes, never filled in.
+Pictures go to ``run_dir/report_files/`` (rebuilt on every call), rendered in one child
+process (:func:`flexnet_fe.report.pictures.render_isolated`). Missing optional files are
+listed as notes, never filled in.
 """
 
 from __future__ import annotations
 
 import logging
-import math
 import shutil
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from flexnet_fe.io import atomic_write_text, read_history_csv
-from flexnet_fe.report.rundir import (RunData, StageInfo, fin_results, flatten, read_run, stage_pngs,
-                                      yield_strength)
-from flexnet_fe.report.units import PA_TO_MPA, format_value, unit_of
+from flexnet_fe.io import atomic_write_text
+from flexnet_fe.report.rundir import RunData, StageInfo, fin_results, flatten, read_run, stage_pngs
+from flexnet_fe.report.units import (PA_TO_MPA, S_TO_MS, format_value, unit_label, unit_of,
+                                     unknown_units)
+from flexnet_fe.report.verdict import Verdict, build_verdict
 
 LOG = logging.getLogger("flexnet.report")
 
 FILES_DIR = "report_files"
-"""Folder of ``run_dir`` holding the pictures the report renders itself (rebuilt each time)."""
+"""Folder of ``run_dir`` holding what the report renders itself (rebuilt each time)."""
 
 LOG_TAIL_LINES = 20
 """Lines of a failed stage's log.txt shown in the report."""
-
-S_TO_MS = 1e3
-"""s → ms (peak times are shown in ms)."""
 
 
 @dataclass(frozen=True)
@@ -54,118 +52,23 @@ class Row:
 
 
 @dataclass(frozen=True)
-class FinRow:
-    """One fin of the shell stress table (display strings) and its picture."""
+class Figure:
+    """An image of the report: path relative to the run directory, caption."""
 
-    name: str
-    peak_vm_mpa: str
-    peak_time_ms: str
-    location_m: str
-    max_principal_mpa: str
-    yield_ratio: str
-    other: tuple[Row, ...]
-    picture: str | None
-    picture_caption: str
+    src: str
+    caption: str
 
 
 def headline_rows(section: dict, skip: set[str] = frozenset()) -> list[Row]:
-    """Rows of a summary section (nested dicts flattened to dotted keys), keys in ``skip`` left out."""
+    """Rows of a summary section (nested dicts flattened to dotted keys), keys in ``skip`` and
+    ``warnings`` lists (shown in the red box) left out."""
     rows = []
     for key, value in flatten({k: v for k, v in section.items() if k not in skip}).items():
+        if key.rsplit(".", 1)[-1] == "warnings":
+            continue
         unit = unit_of(key)
-        rows.append(Row(key, format_value(value, unit), unit.label))
+        rows.append(Row(key, format_value(value, unit), unit_label(key, value)))
     return rows
-
-
-def _fin_row(name: str, res: dict, yield_pa: float | None, picture: str | None, caption: str) -> FinRow:
-    contract = {"peak_von_mises_pa", "peak_time_s", "peak_location_m", "peak_max_principal_pa"}
-    vm = res.get("peak_von_mises_pa")
-    t = res.get("peak_time_s")
-    loc = res.get("peak_location_m")
-    p1 = res.get("peak_max_principal_pa")
-    ratio = (f"{vm / yield_pa:.3g}" if isinstance(vm, (int, float)) and yield_pa else "—")
-    return FinRow(
-        name=name,
-        peak_vm_mpa=format_value(vm * PA_TO_MPA) if isinstance(vm, (int, float)) else "—",
-        peak_time_ms=format_value(t * S_TO_MS) if isinstance(t, (int, float)) else "—",
-        location_m=format_value(loc) if loc is not None else "—",
-        max_principal_mpa=format_value(p1 * PA_TO_MPA) if isinstance(p1, (int, float)) else "—",
-        yield_ratio=ratio,
-        other=tuple(headline_rows(res, skip=contract)),
-        picture=picture, picture_caption=caption)
-
-
-def _picture_job(run: RunData, fin: str, res: dict, out_dir: Path):
-    """(StressJob or None, description of the field drawn / why there is no picture)."""
-    from flexnet_fe.report.pictures import StressJob
-
-    fin_dir = run.run_dir / "shell" / fin
-    envelope, fields = fin_dir / "envelope.xdmf", fin_dir / "fields.xdmf"
-    png = str(out_dir / f"shell_{fin}_von_mises.png")
-    if envelope.is_file():
-        return (StressJob(str(envelope), png, None, f"fin {fin}"),
-                "peak over time of the cell von Mises stress (envelope.xdmf)")
-    if fields.is_file():
-        peak_t = res.get("peak_time_s")
-        at = float(peak_t) if isinstance(peak_t, (int, float)) else None
-        return (StressJob(str(fields), png, at, f"fin {fin}"),
-                "von Mises stress at the field output time nearest the peak (fields.xdmf)")
-    return None, "no envelope.xdmf or fields.xdmf for this fin"
-
-
-def _picture_caption(run: RunData, fin: str, res: dict, what: str, pic, notes: list[str]) -> tuple[str | None, str]:
-    """(relative png or None, caption) from a render result; checks the envelope maximum
-    against the summary's peak (two records of the same number written by the shell stage)."""
-    from flexnet_fe.report.pictures import Picture
-
-    if not isinstance(pic, Picture):
-        notes.append(f"stress picture of fin '{fin}': {pic}")
-        return None, f"could not render: {pic}"
-    when = "" if "envelope" in what else f", t = {pic.time_s * S_TO_MS:.4g} ms"
-    caption = (f"{what}; field {pic.field}{when}; max in picture "
-               f"{pic.max_pa * PA_TO_MPA:.4g} MPa. Undeformed mesh, body frame B [m], seen normal to the fin.")
-    vm = res.get("peak_von_mises_pa")
-    if "envelope" in what and isinstance(vm, (int, float)) and vm > 0 and not math.isclose(pic.max_pa, vm, rel_tol=1e-6):
-        notes.append(f"fin '{fin}': envelope.xdmf maximum {pic.max_pa:.6g} Pa differs from summary.json "
-                     f"peak_von_mises_pa {vm:.6g} Pa")
-    return str(pic.png.relative_to(run.run_dir)), caption
-
-
-def _shell_history_plot(run: RunData, fins: list[str], out_dir: Path, notes: list[str]) -> str | None:
-    """Peak von Mises stress over the fin vs time for every fin with a history.csv; relative path."""
-    curves = {}
-    for fin in fins:
-        path = run.run_dir / "shell" / fin / "history.csv"
-        if not path.is_file():
-            continue
-        try:
-            h = read_history_csv(path)
-        except (OSError, ValueError) as err:
-            notes.append(f"{path.relative_to(run.run_dir)}: unreadable ({err})")
-            continue
-        if "t_s" in h and "max_von_mises_pa" in h:
-            curves[fin] = (h["t_s"], h["max_von_mises_pa"])
-        else:
-            notes.append(f"{path.relative_to(run.run_dir)}: no t_s / max_von_mises_pa columns")
-    if not curves:
-        return None
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(7, 4))
-    for fin, (t, vm) in curves.items():
-        ax.plot(t * S_TO_MS, vm * PA_TO_MPA, label=fin)
-    ax.set_xlabel("time t [ms]")
-    ax.set_ylabel("max von Mises over the fin [MPa]")
-    ax.set_title("Shell stage: peak von Mises stress per fin")
-    ax.grid(True, alpha=0.3)
-    ax.legend()
-    fig.tight_layout()
-    path = out_dir / "shell_von_mises_history.png"
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return str(path.relative_to(run.run_dir))
 
 
 def _log_tail(stage: StageInfo) -> str | None:
@@ -176,63 +79,45 @@ def _log_tail(stage: StageInfo) -> str | None:
 
 
 def _case_tables(case: dict) -> list[tuple[str, list[Row]]]:
-    """Every table of the resolved case as rows (values as resolved, SI, no unit conversion)."""
+    """Every table of the resolved case as rows (values as resolved, SI, no unit conversion),
+    each with the unit its schema description gives (``[m]`` ...; '' when it names none)."""
+    from flexnet_fe.report.sweep import parameter_unit
+
     out = []
     for table, body in case.items():
         if table == "case" or not isinstance(body, dict):
             continue
-        out.append((table, [Row(k, format_value(v), "") for k, v in flatten(body).items()]))
+        out.append((table, [Row(k, format_value(v), parameter_unit(f"{table}.{k}") if v is not None
+                                and not isinstance(v, (bool, str)) else "")
+                            for k, v in flatten(body).items()]))
     return out
 
 
-def _shell_view(run: RunData, stage: StageInfo, out_dir: Path, notes: list[str], view: dict) -> None:
-    """Fin stress table (complete stage only), stress history plot and fin pictures (whenever
-    the files exist; for a stage that is not complete they are labelled as such)."""
-    from flexnet_fe.report.pictures import render_stress_isolated
-
-    fins_summary = fin_results(stage.section) if stage.complete else {}
-    fin_dirs = sorted(p.name for p in stage.folder.iterdir() if p.is_dir()) if stage.folder else []
-    names = list(fins_summary) + [f for f in fin_dirs if f not in fins_summary]
-    plot = _shell_history_plot(run, names, out_dir, notes) if stage.folder else None
-    if plot:
-        view["extra_plots"].append((plot, "Peak von Mises stress over each fin vs time "
-                                          "(from shell/<fin>/history.csv)."))
-    yield_pa, yield_what = yield_strength(run.case)
-    view["yield_note"] = (f"yield strength {yield_pa * PA_TO_MPA:.4g} MPa ({yield_what}, "
-                          "from resolved.json case.missile.material)" if yield_pa
-                          else f"no ratio to yield: {yield_what}")
-    planned = [_picture_job(run, fin, fins_summary.get(fin, {}), out_dir) for fin in names]
-    rendered = iter(render_stress_isolated([job for job, _ in planned if job is not None]))
-    for fin, (job, what) in zip(names, planned):
-        res = fins_summary.get(fin, {})
-        pic, caption = (_picture_caption(run, fin, res, what, next(rendered), notes) if job is not None
-                        else (None, what))
-        if fin in fins_summary:
-            view["fins"].append(_fin_row(fin, res, yield_pa, pic, caption))
-        elif pic:
-            view["extra_plots"].append((pic, f"fin {fin} (no summary numbers: stage {stage.state}): {caption}"))
+def _stage_view(run: RunData, stage: StageInfo) -> dict[str, Any]:
+    skip = set(fin_results(stage.section)) if stage.name == "shell" and stage.complete else set()
+    return {"info": stage, "rows": headline_rows(stage.section, skip) if stage.complete else [],
+            "figures": [], "pictures": [],
+            "pngs": [str(p) for p in stage_pngs(run.run_dir, stage.folder)] if stage.folder else [],
+            "log": str((stage.folder / "log.txt").relative_to(run.run_dir))
+            if stage.folder and (stage.folder / "log.txt").is_file() else None,
+            "log_tail": _log_tail(stage) if stage.state == "failed" else None,
+            # a stage the case does not ask for and that left nothing: status row only
+            "show": stage.requested is not False or stage.folder is not None or stage.section is not None}
 
 
-def _stage_view(run: RunData, stage: StageInfo, out_dir: Path, notes: list[str]) -> dict[str, Any]:
-    view: dict[str, Any] = {"info": stage, "rows": [], "fins": [], "extra_plots": [],
-                            "pngs": [str(p) for p in stage_pngs(run.run_dir, stage.folder)] if stage.folder else [],
-                            "log": str((stage.folder / "log.txt").relative_to(run.run_dir))
-                            if stage.folder and (stage.folder / "log.txt").is_file() else None,
-                            "log_tail": _log_tail(stage) if stage.state == "failed" else None,
-                            "yield_note": None,
-                            # a stage the case does not ask for and that left nothing: status row only
-                            "show": stage.requested is not False or stage.folder is not None
-                            or stage.section is not None}
-    if stage.name == "shell" and (stage.complete or stage.folder is not None):
-        _shell_view(run, stage, out_dir, notes, view)
-    if stage.complete:
-        skip = set(fin_results(stage.section)) if stage.name == "shell" else set()
-        view["rows"] = headline_rows(stage.section, skip)
-    return view
+def _unit_notes(run: RunData, notes: list[str]) -> None:
+    for s in run.stages:
+        if s.complete:
+            missing = unknown_units(flatten(s.section))
+            if missing:
+                notes.append(f"summary.json {s.name}: no unit known for " + ", ".join(missing)
+                             + " (shown with '?'; add it to flexnet_fe/report/units.py)")
 
 
-def build_report(run_dir: Path) -> Path:
+def build_report(run_dir: Path, *, pictures: bool = True) -> Path:
     """Write ``run_dir/report.html`` from the run directory's files; return its path.
+    ``pictures=False`` leaves out the 3-D pictures (offscreen VTK in a child process, the
+    slow part); the plots, tables, energy report and ParaView files are still written.
 
     Raises :class:`FlexnetError` when ``run_dir`` is not a run directory. Pictures go to
     ``run_dir/report_files/`` (deleted and rebuilt on every call); all images are referenced
@@ -240,13 +125,21 @@ def build_report(run_dir: Path) -> Path:
     """
     from jinja2 import Environment, FileSystemLoader, StrictUndefined, select_autoescape
 
+    from flexnet_fe.report.energy import energy_report
+    from flexnet_fe.report.figures import assemble_figures
+
     run = read_run(Path(run_dir))
     out_dir = run.run_dir / FILES_DIR
     if out_dir.exists():
         shutil.rmtree(out_dir)
     out_dir.mkdir()
     notes = list(run.notes)
-    stages = [_stage_view(run, s, out_dir, notes) for s in run.stages]
+    verdict: Verdict = build_verdict(run)
+    stages = [_stage_view(run, s) for s in run.stages]
+    _unit_notes(run, notes)
+    energy = energy_report(run.run_dir, [s.name for s in run.stages], out_dir, notes)
+    warnings = list(verdict.warnings) + _energy_warnings(run, energy)
+    top = assemble_figures(run, verdict, stages, out_dir, notes, pictures)
     meta = run.case.get("case", {}) or {}
     env = Environment(loader=FileSystemLoader(Path(__file__).parent / "templates"),
                       autoescape=select_autoescape(["html", "j2"]), undefined=StrictUndefined,
@@ -258,9 +151,30 @@ def build_report(run_dir: Path) -> Path:
         case_tables=_case_tables(run.case),
         resolved=run.resolved or {},
         run_dir=str(run.run_dir),
-        stages=stages,
-        notes=notes)
+        verdict=verdict, warnings=warnings, top=top, energy=energy,
+        stages=stages, notes=notes, fmt=format_value, mpa=PA_TO_MPA, ms=S_TO_MS)
     path = run.run_dir / "report.html"
     atomic_write_text(path, html)
     LOG.info("report → %s", path)
     return path
+
+
+def _energy_warnings(run: RunData, energy) -> list:
+    """A balance over tolerance in a history whose stage summary gives no energy_error_rel of
+    its own (the summary's own value is checked by the verdict)."""
+    from flexnet_fe.report.verdict import ENERGY_TOL_REL, Warning_
+
+    out = []
+    for fig in energy:
+        stage = fig.label.split("/")[0]
+        part = fig.label.split("/")[1] if "/" in fig.label else None
+        section = (run.summary or {}).get(stage) or {}
+        own = (section.get(part) or {}) if part else section
+        if isinstance(own, dict) and "energy_error_rel" in own:
+            continue
+        if fig.max_error_rel > ENERGY_TOL_REL:
+            src = ("computed by the report from the _j columns (a term the stage does not write, e.g. "
+                   "damping, counts as error)" if fig.balance_from == "report" else f"stage column {fig.balance_from}")
+            out.append(Warning_(stage, f"{fig.label}: energy balance error up to {fig.max_error_rel:.3g} of the "
+                                       f"energy scale > {ENERGY_TOL_REL:.3g} ({src})"))
+    return out

@@ -114,10 +114,11 @@ def stress_field(fields: dict[str, np.ndarray]) -> tuple[str, np.ndarray]:
 
 
 def render_stress(xdmf: Path, png: Path, *, time_s: float | None = None, field: str | None = None,
-                  title: str = "", window: tuple[int, int] = (900, 700)) -> Picture:
+                  title: str = "", window: tuple[int, int] = (900, 700), mark: list | None = None) -> Picture:
     """Draw a fin's von Mises stress [MPa] (or the named cell ``field``) from ``xdmf`` at the
     output time nearest ``time_s`` into ``png``, seen normal to the fin plane, undeformed mesh
-    with its element edges. Coordinates are those of the file (frame B for the shell stage)."""
+    with its element edges. Coordinates are those of the file (frame B for the shell stage).
+    ``mark = [x, y, z, label]`` marks a point [m] (the peak location) with a labelled dot."""
     offscreen_env()
     import pyvista as pv
 
@@ -152,6 +153,10 @@ def render_stress(xdmf: Path, png: Path, *, time_s: float | None = None, field: 
         time_txt = "" if math.isnan(t) or label == ENVELOPE_FIELD else f", t = {t * 1e3:.4g} ms"
         pl.add_text(f"{heading}\n{label}{time_txt}\nmax {values.max() * PA_TO_MPA:.4g} MPa",
                     font_size=10, position="upper_left")
+        if mark is not None:
+            pl.add_point_labels(pv.PolyData(np.array([mark[:3]], dtype=float)), [str(mark[3])],
+                                point_size=16, point_color="magenta", font_size=12, shape_opacity=0.7,
+                                always_visible=True, render_points_as_spheres=True)
         pl.add_axes()
         pl.screenshot(str(png))
     finally:
@@ -176,9 +181,13 @@ def pvd_entries(pvd: Path) -> list[tuple[float, Path]]:
 def render_net(pvd: Path, png: Path, *, count: int = 6, scalars: str | None = "tension_n",
                title: str = "", window: tuple[int, int] = (1400, 800)) -> list[float]:
     """Draw ``count`` snapshots (evenly spread over the collection) of a net ``.pvd`` side by side
-    into ``png``, seen along the world z axis (flight direction, frame W), all at the same scale
-    (one shared camera) and colour range; colours = the cell array ``scalars`` if every snapshot
-    has it. Returns the snapshot times shown [s]."""
+    into ``png``, seen along the world z axis (flight direction, frame W), colours = the cell
+    array ``scalars`` (one range for all panels) if every snapshot has it.
+
+    The camera follows the net: each panel is centred on its own snapshot (the net flies
+    hundreds of metres along z during deployment, ≈ 370 m in ``radar_traction``), with one
+    parallel-projection scale for all panels so that sizes compare; the panel text gives the
+    centre's z. Returns the snapshot times shown [s]."""
     offscreen_env()
     import pyvista as pv
 
@@ -190,8 +199,8 @@ def render_net(pvd: Path, png: Path, *, count: int = 6, scalars: str | None = "t
     colour = bool(scalars) and all(scalars in m.cell_data for _, m in meshes)
     clim = ([min(float(np.min(m.cell_data[scalars])) for _, m in meshes),
              max(float(np.max(m.cell_data[scalars])) for _, m in meshes)] if colour else None)
-    pts = np.vstack([np.asarray(m.points) for _, m in meshes])
-    bounds = [v for lo, hi in zip(pts.min(axis=0), pts.max(axis=0)) for v in (lo, hi)]
+    half = max(0.5 * float(max(np.ptp(np.asarray(m.points)[:, 0]), np.ptp(np.asarray(m.points)[:, 1])))
+               for _, m in meshes) * 1.08 or 1.0
     ncol = min(3, len(meshes))
     nrow = math.ceil(len(meshes) / ncol)
     png = Path(png)
@@ -203,13 +212,16 @@ def render_net(pvd: Path, png: Path, *, count: int = 6, scalars: str | None = "t
             if colour:
                 pl.add_mesh(mesh, scalars=scalars, cmap="viridis", clim=clim, line_width=1.5,
                             show_scalar_bar=(k == len(meshes) - 1),
-                            scalar_bar_args={"title": scalars, "fmt": "%.3g"})
+                            scalar_bar_args={"title": f"{scalars} [N]" if scalars.endswith("_n") else scalars,
+                                             "fmt": "%.3g"})
             else:
                 pl.add_mesh(mesh, color="black", line_width=1.5)
-            pl.add_text(f"{title} t = {t * 1e3:.4g} ms".strip(), font_size=9)
-        pl.link_views()
-        pl.view_xy()
-        pl.reset_camera(bounds=bounds)
+            c = np.asarray(mesh.center)
+            pl.add_text(f"{title} t = {t * 1e3:.4g} ms\ncentre z = {c[2]:.4g} m".strip(), font_size=9)
+            pl.enable_parallel_projection()
+            pl.camera_position = [tuple(c + np.array([0.0, 0.0, 10.0 * half])), tuple(c), (0.0, 1.0, 0.0)]
+            pl.camera.parallel_scale = half
+            pl.reset_camera_clipping_range()
         pl.screenshot(str(png))
     finally:
         pl.close()
@@ -224,6 +236,8 @@ class StressJob:
     png: str
     time_s: float | None = None
     title: str = ""
+    mark: list | None = None
+    """``[x, y, z, label]``: a point [m] to mark and its label (the summary's peak)."""
 
 
 RENDER_TIMEOUT_S = 120.0
@@ -233,20 +247,50 @@ RENDER_TIMEOUT_S = 120.0
 def render_stress_isolated(jobs: list[StressJob]) -> list[Picture | str]:
     """Render ``jobs`` with :func:`render_stress` in one child process; per job the
     :class:`Picture` or the reason it failed (the child's exception, or how the child died)."""
+    results = render_isolated([{"kind": "stress", "args": asdict(j)} for j in jobs])
+    return [r if isinstance(r, str) else
+            Picture(png=Path(r["png"]), field=r["field"], time_s=r["time_s"], max_pa=r["max_pa"])
+            for r in results]
+
+
+def _stress_job(xdmf: str, png: str, time_s: float | None = None, title: str = "",
+                mark: list | None = None) -> dict:
+    pic = render_stress(Path(xdmf), Path(png), time_s=time_s, title=title, mark=mark)
+    return {"png": str(pic.png), "field": pic.field, "time_s": pic.time_s, "max_pa": pic.max_pa}
+
+
+def _kinds() -> dict:
+    """Job kinds the child process runs: name → function(**args) returning a JSON-able value."""
+    from flexnet_fe.report import scenes
+
+    return {"stress": _stress_job, "missile": scenes.render_missile_stress,
+            "net_events": scenes.render_net_events, "animation": scenes.render_animation,
+            "net_panels": _net_panels_job}
+
+
+def _net_panels_job(pvd: str, png: str, count: int = 6, title: str = "") -> list[float]:
+    return render_net(Path(pvd), Path(png), count=count, title=title)
+
+
+def render_isolated(jobs: list[dict]) -> list[dict | str | list | float]:
+    """Run picture ``jobs`` (``{"kind": name in _kinds(), "args": {...}}``) in one child
+    process; per job its JSON result or, as a string, why it failed (the child's error, or how
+    the child died: a VTK crash ends the child, not the caller)."""
     if not jobs:
         return []
     import tempfile
 
     with tempfile.TemporaryDirectory(prefix="flexnet-render-") as tmp:
         job_file, out_file = Path(tmp) / "jobs.json", Path(tmp) / "results.json"
-        job_file.write_text(json.dumps([asdict(j) for j in jobs]))
+        job_file.write_text(json.dumps(jobs))
         package_root = str(Path(__file__).resolve().parents[2])  # so the child imports this flexnet_fe
         env = dict(os.environ, VTK_DEFAULT_OPENGL_WINDOW=os.environ.get("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow"),
                    PYVISTA_OFF_SCREEN=os.environ.get("PYVISTA_OFF_SCREEN", "true"),
                    PYTHONPATH=os.pathsep.join(p for p in (package_root, os.environ.get("PYTHONPATH")) if p))
+        limit = RENDER_TIMEOUT_S * len(jobs)
         try:
             proc = subprocess.run([sys.executable, "-m", "flexnet_fe.report.pictures", str(job_file), str(out_file)],
-                                  env=env, capture_output=True, text=True, timeout=RENDER_TIMEOUT_S * len(jobs))
+                                  env=env, capture_output=True, text=True, timeout=limit)
             died = None
             if proc.returncode < 0:
                 died = f"renderer process killed by {signal.Signals(-proc.returncode).name}"
@@ -254,32 +298,30 @@ def render_stress_isolated(jobs: list[StressJob]) -> list[Picture | str]:
                 tail = (proc.stderr.strip().splitlines() or ["no message"])[-1]
                 died = f"renderer process exited with code {proc.returncode}: {tail}"
         except subprocess.TimeoutExpired:
-            died = f"renderer process timed out after {RENDER_TIMEOUT_S * len(jobs):.0f} s"
+            died = f"renderer process timed out after {limit:.0f} s"
         done = json.loads(out_file.read_text()) if out_file.is_file() else []
-    out: list[Picture | str] = []
-    for k, job in enumerate(jobs):
+    out: list = []
+    for k in range(len(jobs)):
         if k < len(done):
-            r = done[k]
-            out.append(r["error"] if "error" in r else
-                       Picture(png=Path(r["png"]), field=r["field"], time_s=r["time_s"], max_pa=r["max_pa"]))
+            out.append(done[k]["error"] if "error" in done[k] else done[k]["ok"])
         else:
             out.append(died or "renderer process gave no result")
     return out
 
 
 def _child(job_file: str, out_file: str) -> None:
-    """Child entry: render each job, rewriting the results file after each one so the results
+    """Child entry: run each job, rewriting the results file after each one so the results
     of the jobs before a crash survive."""
     offscreen_env()
     import pyvista  # noqa: F401  (load VTK before anything else, see the module doc)
 
+    kinds = _kinds()
     results = []
     for job in json.loads(Path(job_file).read_text()):
         try:
-            pic = render_stress(Path(job["xdmf"]), Path(job["png"]), time_s=job["time_s"], title=job["title"])
-            results.append({"png": str(pic.png), "field": pic.field, "time_s": pic.time_s, "max_pa": pic.max_pa})
-        except FlexnetError as err:
-            results.append({"error": str(err)})
+            results.append({"ok": kinds[job["kind"]](**job["args"])})
+        except (FlexnetError, OSError, ValueError, KeyError) as err:
+            results.append({"error": f"{type(err).__name__}: {err}" if not isinstance(err, FlexnetError) else str(err)})
         Path(out_file).write_text(json.dumps(results))
 
 

@@ -1,14 +1,16 @@
-"""build_report on synthetic run directories (tests/report/conftest.py).
+"""build_report on synthetic run directories (tests/report/synthetic.py).
 
 References: the values the synthetic run writes into summary.json / status.json / the XDMF files
-(known inputs, not outputs of the code under test). The report shows 4 significant digits, so a
-displayed number may differ from the written one by at most half a unit of the 4th digit:
-relative 5e-4 (3 digits for the yield ratio: 5e-3).
+(known inputs, not outputs of the code under test), and the margin of safety's definition
+MS = allowable / σ_vm − 1. The report shows 4 significant digits, so a displayed number may
+differ from the written one by at most half a unit of the 4th digit: relative 5e-4 (margins
+are shown to 3 decimals: absolute 5e-4).
 """
 
 from __future__ import annotations
 
 import json
+import re
 
 import numpy as np
 import pytest
@@ -17,13 +19,12 @@ from flexnet_fe.errors import FlexnetError
 from flexnet_fe.report import build_report
 from flexnet_fe.report.pictures import (Picture, StressJob, plane_normal, read_cell_fields,
                                         render_stress_isolated)
-from flexnet_fe.report.units import unit_of
 
-from .synthetic import (ENVELOPE_P1_PA, ENVELOPE_VM_PA, FLIGHT_ERROR, SUMMARY, YIELD_PA, make_run,
-                      parse_html, write_cell_xdmf)
+from .synthetic import (ENVELOPE_P1_PA, ENVELOPE_VM_PA, FLIGHT_ERROR, RUDDER_ALLOWABLE_PA, RUDDER_VM_PA,
+                        SUMMARY, YIELD_PA, make_run, parse_html, write_cell_xdmf)
 
 DIGITS4 = 5e-4  # half a unit of the 4th significant digit, relative
-DIGITS3 = 5e-3
+MS_DIGITS = 5e-4  # margins shown as %+.3f
 
 
 def _rows(tree) -> dict[str, list[str]]:
@@ -31,9 +32,15 @@ def _rows(tree) -> dict[str, list[str]]:
     return {r[0]: r[1:] for t in tree.tables.values() for r in t if r}
 
 
-def test_headline_numbers_match_summary(run_dir):
-    html = build_report(run_dir).read_text()
-    rows = _rows(parse_html(html))
+def _warning_box(html: str) -> str:
+    m = re.search(r'<div id="warnings">(.*?)</div>', html, re.S)
+    assert m, "no warnings box"
+    return m.group(1)
+
+
+def test_headline_numbers_match_summary(built):
+    _, _, tree = built
+    rows = _rows(tree)
     # value, unit against the summary.json the test wrote
     assert float(rows["deploy.max_area_m2"][0]) == pytest.approx(SUMMARY["deploy"]["max_area_m2"], rel=DIGITS4)
     assert rows["deploy.max_area_m2"][1] == "m²"
@@ -43,58 +50,103 @@ def test_headline_numbers_match_summary(run_dir):
     np.testing.assert_allclose(axis, SUMMARY["collide"]["peak_accel_axis_mps2"], rtol=DIGITS4)
     assert float(rows["shell.dt_s"][0]) == pytest.approx(1e-7, rel=DIGITS4)
     assert rows["shell.dt_s"][1] == "s"
-    assert rows["deploy.steps"][0] == "120000"           # integers exactly
+    assert rows["deploy.steps"] == ["120000", "count"]    # integers exactly
     assert rows["deploy.period_s"][0] == "—"              # JSON null shown as missing, not 0
-    assert rows["deploy.air.on"][0] == "no"
+    assert rows["deploy.air.on"] == ["no", ""]
     assert rows["collide.passed_through"][0] == "yes"
+    assert rows["collide.fin_impulse_ns.wing_1"] == ["1.5", "N·s"]
     assert float(rows["deploy.air.density_kgpm3"][0]) == pytest.approx(0.5258, rel=DIGITS4)
-    assert "shell.wing_1.peak_von_mises_pa" not in rows   # fins go to the stress table
+    assert "shell.wing_1.peak_von_mises_pa" not in rows   # fins go to the verdict table
+    assert "collide.warnings" not in rows                 # warnings go to the red box
 
 
-def test_fin_stress_table_and_yield_ratio(run_dir):
-    tree = parse_html(build_report(run_dir).read_text())
-    header, wing = tree.tables["fin-stress"][0], tree.tables["fin-stress"][1]
-    assert header[1] == "peak von Mises [MPa]"
-    assert wing[0] == "wing_1"
-    assert float(wing[1]) == pytest.approx(ENVELOPE_VM_PA.max() / 1e6, rel=DIGITS4)
-    assert float(wing[2]) == pytest.approx(1.5, rel=DIGITS4)            # 1.5e-3 s in ms
-    assert wing[3] == "[-0.85, 0.1, 0.25]"
-    assert float(wing[4]) == pytest.approx(ENVELOPE_P1_PA.max() / 1e6, rel=DIGITS4)
-    # σ_vm / σ_y with σ_y = 503 MPa from resolved.json case.missile.material
-    assert float(wing[5]) == pytest.approx(ENVELOPE_VM_PA.max() / YIELD_PA, rel=DIGITS3)
+def test_verdict_fins_match_summary_and_margins(built):
+    _, html, tree = built
+    head, *body = tree.tables["verdict-fins"]
+    fins = {r[0]: dict(zip(head, r)) for r in body}
+    assert list(fins) == ["wing_1", "rudder_2"]
+    w = fins["wing_1"]
+    vm = ENVELOPE_VM_PA.max()
+    assert float(w["peak von Mises [MPa]"]) == pytest.approx(vm / 1e6, rel=DIGITS4)
+    assert float(w["at t [ms]"]) == pytest.approx(1.5, rel=DIGITS4)
+    assert w["location x, y, z (frame B) [m]"] == "[-0.85, 0.1, 0.25]"
+    assert float(w["peak max principal [MPa]"]) == pytest.approx(ENVELOPE_P1_PA.max() / 1e6, rel=DIGITS4)
+    assert float(w["error estimate [%]"]) == pytest.approx(3.0, rel=DIGITS4)
+    # no allowable_pa for wing_1: the yield strength of resolved.json, and the report says so
+    assert float(w["allowable [MPa]"]) == pytest.approx(YIELD_PA / 1e6, rel=DIGITS4)
+    assert "yield strength of Al 7075-T6" in w["allowable from"]
+    ms_key = next(k for k in head if k.startswith("MS"))
+    assert float(w[ms_key]) == pytest.approx(YIELD_PA / vm - 1.0, abs=MS_DIGITS)   # +3.074
+    assert w["verdict"] == "PASS"
+    r = fins["rudder_2"]
+    assert float(r["allowable [MPa]"]) == pytest.approx(RUDDER_ALLOWABLE_PA / 1e6, rel=DIGITS4)
+    assert r["allowable from"] == "shell summary allowable_pa"
+    assert float(r[ms_key]) == pytest.approx(RUDDER_ALLOWABLE_PA / RUDDER_VM_PA.max() - 1.0, abs=MS_DIGITS)
+    assert r["verdict"] == "FAIL (within error)"          # |MS| = 0.111 ≤ error estimate 0.2
+    assert 'id="overall">Fin strength: FAIL' in html
+    # the missile part: Δv = dv_over_v × impact speed is not computable (no impact speed in this
+    # resolved case), so |Δv|/v is shown as given; the peak acceleration says it is unfiltered
+    missile = {r[0]: r[1:] for r in tree.tables["verdict-missile"][1:]}
+    assert missile["|Δv| / v"][0] == "0.0123"
+    assert missile["peak CG acceleration"][0] == "1.235e+04 m/s² at 1 ms"
+    assert "NOT CFC-filtered" in missile["peak CG acceleration"][1]
+    assert missile["net"][0] == "passed through"
 
 
-def test_failed_stage_shown_failed_with_error(run_dir):
-    html = build_report(run_dir).read_text()
-    tree = parse_html(html)
+def test_warnings_in_red_box_at_the_top(built):
+    _, html, _ = built
+    box = _warning_box(html)
+    assert html.index('id="warnings"') < html.index('id="verdict"')      # before the verdict
+    assert "forced &lt;warning&gt; of the synthetic collide stage" in box  # summary warnings, escaped
+    assert "tunnelling" in box and "7 rope-segment crossings" in box
+    assert "energy balance error 0.2 exceeds the tolerance 0.05" in box
+    assert "stage FAILED: " + FLIGHT_ERROR in box
+    assert "fin rudder_2: peak stress error estimate 0.2 &gt; 0.1 (unconverged peak)" in box
+    assert "fin rudder_1 received 0.25 N·s of contact impulse but has no shell result" in box
+    assert "shell/wing_1: energy" not in box              # its balance closes: 2 + 1 − 3 = 0 J
+
+
+def test_every_image_exists_and_is_a_png(built):
+    from PIL import Image
+
+    run, html, tree = built
+    expected = {"report_files/missile_von_mises.png", "report_files/collide_net_events.png",
+                "report_files/shell_stress_history.png", "report_files/collide_response.png",
+                "report_files/energy_collide.png", "report_files/energy_shell_wing_1.png",
+                "report_files/shell_wing_1_von_mises.png", "report_files/shell_rudder_2_von_mises.png",
+                "deploy/deploy.png", "collide/collide_accel.png"}
+    assert expected <= set(tree.images)
+    for src in tree.images:
+        path = run / src                                  # relative paths that resolve
+        with Image.open(path) as im:
+            assert im.format == "PNG" and im.width > 0 and im.height > 0, src
+            assert np.asarray(im.convert("L"), dtype=float).std() > 1.0, f"{src} is blank"
+    gif = run / "report_files" / "collision.gif"
+    assert 'href="report_files/collision.gif"' in html
+    with Image.open(gif) as im:
+        assert im.format == "GIF" and im.n_frames == 4         # one frame per collide snapshot
+    assert "differs from summary.json" not in html           # envelope maxima = summary peaks
+
+
+def test_html_escapes_case_text(built):
+    _, html, _ = built
+    assert "synthetic run &lt;for&gt; the report tests" in html
+    assert "<for>" not in html and "<warning>" not in html
+
+
+def test_failed_stage_shown_failed_with_error(built):
+    _, html, tree = built
     status = {r[0]: r for r in tree.tables["stage-status"][1:]}
     assert status["flight"][2] == "failed"
     assert status["flight"][4] == FLIGHT_ERROR
     assert all(status[s][2] == "done" for s in ("deploy", "collide", "shell"))
     # the failed stage's leftover summary section is not presented as a result
-    rows = _rows(tree)
-    assert not any(k.startswith("flight.") for k in rows)
+    assert not any(k.startswith("flight.") for k in _rows(tree))
     assert "987.7" not in html and "987.654" not in html
     assert "Stage <b>flight</b> FAILED" in html
     assert "ERROR stage flight failed" in html            # tail of flight/log.txt
-
-
-def test_pictures_and_plots_referenced(run_dir):
-    html = build_report(run_dir).read_text()
-    tree = parse_html(html)
-    for src in tree.images:
-        assert (run_dir / src).is_file(), src             # relative paths that resolve
-    assert "deploy/deploy.png" in tree.images and "collide/collide_accel.png" in tree.images
-    assert "report_files/shell_wing_1_von_mises.png" in tree.images
-    assert "report_files/shell_von_mises_history.png" in tree.images
-    # the envelope maximum read back equals the summary peak: no mismatch note
-    assert "differs from summary.json" not in html
-
-
-def test_html_escapes_case_text(run_dir):
-    html = build_report(run_dir).read_text()
-    assert "synthetic run &lt;for&gt; the report tests" in html
-    assert "<for>" not in html
+    flight = {r[0]: r[1:] for r in tree.tables["verdict-flight"][1:]}
+    assert flight["flight outcome"][0] == "no result"
 
 
 def test_envelope_read_back_cell_by_cell(run_dir):
@@ -133,16 +185,20 @@ def test_missing_optional_files_do_not_crash(tmp_path):
     for p in (run / "deploy").glob("*.png"):
         p.unlink()
     (run / "shell" / "wing_1" / "history.csv").unlink()
-    html = build_report(run).read_text()
+    html = build_report(run, pictures=False).read_text()
     tree = parse_html(html)
-    wing = tree.tables["fin-stress"][1]
-    assert wing[5] == "—"                                  # no yield strength: no ratio
-    assert "no ratio to yield: the resolved case has no [missile] table" in html
+    wing = dict(zip(tree.tables["verdict-fins"][0], tree.tables["verdict-fins"][1]))
+    assert wing["allowable [MPa]"] == "—" and wing["verdict"] == "—"   # no yield strength: no margin
+    assert wing["allowable from"] == "none: the resolved case has no [missile] table"
     assert "no envelope.xdmf or fields.xdmf for this fin" in html
+    assert "ParaView missile file not written" in html
 
 
 def test_broken_xdmf_is_a_note(run_dir):
     (run_dir / "shell" / "wing_1" / "envelope.h5").unlink()
+    import shutil
+
+    shutil.rmtree(run_dir / "collide")                     # only the fin pictures are rendered
     html = build_report(run_dir).read_text()
     parse_html(html)
     assert "stress picture of fin &#39;wing_1&#39;" in html and "cannot read" in html
@@ -160,6 +216,9 @@ def test_status_only_and_done_without_section(tmp_path):
     assert status["collide"][2] == "running"
     assert "resolved.json is missing" in html and "summary.json is missing" in html
     assert "stage &#39;deploy&#39; is done in status.json but summary.json has no" in html
+    box = _warning_box(html)
+    assert "interrupted" in box and "done in status.json but summary.json has no section" in box
+    assert 'id="overall">Fin strength: INCOMPLETE' in html
 
 
 def test_not_a_run_directory(tmp_path):
@@ -180,15 +239,6 @@ def test_plane_normal_of_a_tilted_plane():
     assert abs(abs(plane_normal(pts) @ n) - 1.0) < 1e-12
 
 
-@pytest.mark.parametrize("key, label, scale", [
-    ("max_area_m2", "m²", 1.0), ("dt_s", "s", 1.0), ("peak_accel_mps2", "m/s²", 1.0),
-    ("shell.wing_1.peak_von_mises_pa", "MPa", 1e-6), ("max_penetration_m", "m", 1.0),
-    ("max_achieved_accel_g", "g (load factor)", 1.0), ("dofs", "", 1.0), ("dv_over_v", "", 1.0)])
-def test_unit_from_suffix(key, label, scale):
-    u = unit_of(key)
-    assert (u.label, u.scale) == (label, scale)
-
-
 def test_unrequested_pending_stage_only_in_status_table(tmp_path):
     from flexnet_fe.io import atomic_write_json
 
@@ -207,8 +257,8 @@ def test_fin_table_without_shell_folder(run_dir):
     import shutil
 
     shutil.rmtree(run_dir / "shell")
-    tree = parse_html(build_report(run_dir).read_text())
-    wing = tree.tables["fin-stress"][1]
+    tree = parse_html(build_report(run_dir, pictures=False).read_text())
+    wing = tree.tables["verdict-fins"][1]
     assert wing[0] == "wing_1"
     assert float(wing[1]) == pytest.approx(ENVELOPE_VM_PA.max() / 1e6, rel=DIGITS4)
 
@@ -217,8 +267,9 @@ def test_failed_shell_stage_partial_pictures_labelled(run_dir):
     status = json.loads((run_dir / "status.json").read_text())
     status["stages"]["shell"] = {"state": "failed", "error": "NumericalError: energy growth"}
     (run_dir / "status.json").write_text(json.dumps(status))
-    html = build_report(run_dir).read_text()
+    html = build_report(run_dir, pictures=False).read_text()
     tree = parse_html(html)
-    assert "fin-stress" not in tree.tables                       # no numbers for a failed stage
-    assert "fin wing_1 (no summary numbers: stage failed)" in html
+    assert "verdict-fins" not in tree.tables                     # no numbers for a failed stage
+    assert "Stress pictures per fin (files of a stage that is not complete)" in html
     assert "Stage <b>shell</b> FAILED: NumericalError: energy growth" in html
+    assert 'id="overall">Fin strength: INCOMPLETE' in html

@@ -35,6 +35,8 @@ def test_show_stress_envelope(tmp_path):
 def test_show_stress_missing_files_is_an_error(tmp_path):
     run = make_run(tmp_path / "run", xdmf=False)
     p = _run("show_stress.py", run)
+    assert p.returncode == 2 and "no fin folders" in p.stderr     # fin folders hold XDMF files
+    p = _run("show_stress.py", run, "--fin", "wing_1")
     assert p.returncode == 1 and "no such file" in p.stderr
 
 
@@ -57,3 +59,26 @@ def test_show_net_from_pvd(tmp_path):
     assert (tmp_path / "run" / "postprocess" / "deploy_net.png").is_file()
     # 3 snapshots evenly spread over 4: indices 0, 2 (1.5 rounds to even), 3
     assert "3 snapshots, t = 0, 0.2, 0.3 s" in p.stdout
+
+
+def test_show_net_follows_a_net_that_flies_away(tmp_path):
+    """The traction net flies ≈ 370 m along z while it opens; every panel must show it (a
+    shared camera drew blank panels). Reference: the panel layout (3 columns × 1 row)."""
+    from PIL import Image
+
+    from .synthetic import grid_net, write_lines_pvd
+
+    stage = tmp_path / "run" / "deploy"
+    frames = []
+    for t, z, half in ((0.0, 0.0, 1.0), (0.1, 120.0, 2.0), (0.2, 370.0, 3.0)):
+        x, lines = grid_net(z, half=half)
+        frames.append((t, x + np.array([0.0, 0.3 * z, 0.0]), lines))   # drifts sideways too
+    write_lines_pvd(stage, "net", frames, tension=True)
+    png = tmp_path / "net.png"
+    p = _run("show_net.py", tmp_path / "run", "--count", 3, "--out", png)
+    assert p.returncode == 0, p.stderr
+    img = np.asarray(Image.open(png).convert("L"), dtype=float)
+    h, w = img.shape
+    for k in range(3):                                   # the middle of each panel holds net lines
+        panel = img[h // 4: 3 * h // 4, k * w // 3 + w // 12: (k + 1) * w // 3 - w // 12]
+        assert (panel < 200).mean() > 0.01, f"panel {k} is blank"

@@ -15,7 +15,7 @@ import pytest
 
 from flexnet_fe.errors import FlexnetError
 from flexnet_fe.report import build_sweep_report
-from flexnet_fe.report.sweep import numeric_outputs, read_table, swept_parameters
+from flexnet_fe.report.sweep import numeric_outputs, override_columns, read_table, swept_parameters
 
 from .synthetic import parse_html
 
@@ -36,26 +36,32 @@ def _sweep_rows():
     for d in (2e-3, 3e-3, 4e-3):
         for dmg in (0.0, 0.4):
             rows.append({"label": f"{d}_{dmg}", "net.rope_diameter": str(d), "flight.damage.wing_damage": str(dmg),
+                         "collide.restitution": "0.5",
                          "deploy.max_area_m2": 25.0 * d / 1e-3 + dmg, "deploy.steps": 1000,
                          "flight.hit": dmg == 0.0, "deploy.snapshots": "net.pvd",
-                         "shell.wing_1.peak_von_mises_pa": 1e8 * d / 1e-3, "error": ""})
+                         "shell.wing_1.peak_von_mises_pa": 1e8 * d / 1e-3,
+                         "shell.rudder_2.peak_von_mises_pa": 3e8 - 1e8 * d / 1e-3,
+                         "flight.wing_damage": dmg,
+                         # a summary key with the name of a case field (the flight stage's own sweep):
+                         # not an override, not a parameter
+                         "flight.sweep.parameter": "damage", "error": ""})
     rows[-1] = {"label": rows[-1]["label"], "net.rope_diameter": "0.004", "flight.damage.wing_damage": "0.4",
-                "error": "NumericalError: shell dt > dt_crit"}
+                "collide.restitution": "0.5", "error": "NumericalError: shell dt > dt_crit"}
     return rows
 
 
 def test_parameters_and_outputs_inferred(tmp_path):
     columns, rows = read_table(_write(tmp_path / "sweep.csv", _sweep_rows()))
+    # overrides = the leading case-schema columns after label; swept = those with 2+ values
+    assert override_columns(columns) == ["net.rope_diameter", "flight.damage.wing_damage", "collide.restitution"]
     params = swept_parameters(columns, rows)
-    # override columns are case-schema fields; summary keys are not
     assert params == ["net.rope_diameter", "flight.damage.wing_damage"]
     outs = {c.name: c for c in numeric_outputs(columns, rows, skip={"label", "error", *params})}
-    assert set(outs) == {"deploy.max_area_m2", "deploy.steps", "flight.hit", "shell.wing_1.peak_von_mises_pa"}
     assert outs["flight.hit"].boolean and outs["flight.hit"].values[:2] == (1.0, 0.0)
     assert outs["deploy.max_area_m2"].values[-1] is None       # the failed row is not a point
 
 
-def test_sweep_report(tmp_path):
+def test_sweep_report_plots_only_headlines(tmp_path):
     table = _write(tmp_path / "sweep.csv", _sweep_rows())
     (tmp_path / "0.002_0.0").mkdir()
     (tmp_path / "0.002_0.0" / "report.html").write_text("<html></html>")
@@ -65,30 +71,42 @@ def test_sweep_report(tmp_path):
     tree = parse_html(html)
     body = tree.tables["sweep-table"]
     assert len(body) == 1 + 6                                    # header + one row per run
-    header = body[0]
-    row0 = dict(zip(header, body[1]))
+    row0 = dict(zip(body[0], body[1]))
     assert float(row0["deploy.max_area_m2"]) == pytest.approx(50.0, rel=SIX_DIGITS)
     assert float(row0["shell.wing_1.peak_von_mises_pa"]) == pytest.approx(2e8, rel=SIX_DIGITS)
     assert '<a href="0.002_0.0/report.html">' in html           # link to the run's own report
     assert "NumericalError: shell dt &gt; dt_crit" in html       # failed run listed with its error
-    # 3 varying numeric outputs x 2 swept parameters; deploy.steps is constant (listed, not plotted)
+    # only headline columns are plotted (not deploy.steps, not the fins one by one)
+    plotted = [r[0] for r in tree.tables["plotted"][1:]]
+    assert plotted == ["deploy.max_area_m2", "shell.max_fin_peak_von_mises_pa", "flight.wing_damage", "flight.hit"]
+    # one figure per swept parameter, one panel per headline; 5 successful runs per panel
     pngs = sorted(p.name for p in (tmp_path / "sweep_report_files").glob("*.png"))
-    assert len(pngs) == 6 and not any("deploy.steps" in p for p in pngs)
-    assert all((tmp_path / src).is_file() for src in tree.images) and len(tree.images) == 6
-    # every successful run is a point of each plot: 5 of the 6 rows
-    assert re.findall(r"\((\d+) points\)</figcaption>", html) == ["5"] * 6
-    assert "deploy.steps" in {r[0] for r in tree.tables["_1"]}
+    assert pngs == ["headlines__vs__flight.damage.wing_damage.png", "headlines__vs__net.rope_diameter.png"]
+    assert all((tmp_path / src).is_file() for src in tree.images) and len(tree.images) == 2
+    caps = re.findall(r"<figcaption>[^<]*points per panel: ([^<]*)</figcaption>", html)
+    assert caps == ["deploy.max_area_m2 5, shell.max_fin_peak_von_mises_pa 5, flight.wing_damage 5, flight.hit 5"] * 2
+    # the computed headline: the largest fin peak of each row, shown in MPa in the headline table
+    comp = {r[0]: dict(zip(tree.tables["comparison"][0], r)) for r in tree.tables["comparison"][1:]}
+    assert float(comp["0.002_0.0"]["largest fin peak von Mises [MPa]"]) == pytest.approx(200.0, rel=1e-3)
+    assert float(comp["0.003_0.0"]["largest fin peak von Mises [MPa]"]) == pytest.approx(300.0, rel=1e-3)
+    # no noise: the one-valued override is listed as name = value; summary keys are not overrides
+    assert "<code>collide.restitution = 0.5</code>" in html
+    assert "flight.sweep.parameter =" not in html and "Fixed overrides" not in html
 
 
-def test_batch_report_plots_per_run(tmp_path):
+def test_batch_report_is_a_comparison_table(tmp_path):
     rows = [{"label": "traction_deploy", "deploy.max_area_m2": 101.0, "error": ""},
             {"label": "rotary_deploy", "deploy.max_area_m2": 110.0, "error": ""},
-            {"label": "flight_baseline", "flight.miss_distance_m": 1.5, "error": ""}]
+            {"label": "flight_baseline", "flight.miss_distance_m": 1.5, "flight.hit": True, "error": ""},
+            {"label": "broken", "error": "CaseError: x"}]
     html = build_sweep_report(_write(tmp_path / "batch.csv", rows)).read_text()
-    parse_html(html)
-    assert "none (a batch: outputs are plotted per run)" in html
-    assert (tmp_path / "batch_report_files" / "deploy.max_area_m2__vs__label.png").is_file()
-    assert "(2 points)" in html                                  # only the runs that have the key
+    tree = parse_html(html)
+    assert "batch report" in html and tree.images == []           # no line plot between cases
+    head, *body = tree.tables["comparison"]
+    assert head == ["case", "status", "largest net area [m²]", "miss distance [m]", "missile hits the aircraft"]
+    assert [r[:2] for r in body] == [["traction_deploy", "ok"], ["rotary_deploy", "ok"],
+                                     ["flight_baseline", "ok"], ["broken", "failed"]]   # one row per case
+    assert body[0][2] == "101" and body[0][3] == "—" and body[2][3:] == ["1.5", "yes"]
 
 
 def test_explicit_parameter_must_be_a_column(tmp_path):

@@ -1,0 +1,274 @@
+"""The verdict at the top of the report: fin margins of safety, the missile's response, the
+flight outcome and every warning any stage logged (issue 12 item 1).
+
+Everything here is read from the run directory (``summary.json``, ``status.json``,
+``resolved.json``); nothing is recomputed from physics. The only arithmetic is the margin of
+safety and the Δv fallback, both stated on the report.
+
+Margin of safety (static strength, as in a stress report):
+
+    MS = σ_allow / σ − 1        PASS when MS ≥ 0
+
+with σ the fin's peak von Mises stress (a ductile fin yields on von Mises) and σ_allow the
+shell summary's ``allowable_pa`` for that fin, or — only when the key is absent — the fin
+material's yield strength from ``resolved.json`` (``case.missile.material.yield_strength``);
+the report says which source each fin used. When the peak carries an error estimate
+(``peak_error_estimate_rel``) and ``|MS| ≤`` the estimate (σ ± its error straddles the
+allowable) the verdict is marked "within the error estimate" and a warning is raised.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+from flexnet_fe.report.rundir import RunData, fin_results, yield_strength
+
+ENERGY_TOL_REL = 0.05
+"""Energy-balance error above which a warning is raised when the stage gives no tolerance of
+its own (``energy_tolerance_rel``). 5 %: the usual acceptance of an explicit run's energy
+ratio (glstat total / initial + external work within a few per cent)."""
+
+PEAK_ERROR_TOL_REL = 0.10
+"""Peak-stress error estimate above which the peak is flagged as unconverged (10 %)."""
+
+WARNING_KEYS = ("warnings",)
+"""Summary keys holding lists of one-line warnings (brief: any stage, any section level)."""
+
+TUNNELLING_KEYS = ("tunnelling", "tunnelled")
+"""Boolean summary keys that flag ropes passing through the missile unresisted."""
+
+
+@dataclass(frozen=True)
+class Warning_:
+    """One line of the red box: the stage (or 'run') and the text."""
+
+    stage: str
+    text: str
+
+
+@dataclass(frozen=True)
+class FinVerdict:
+    """One fin's line of the verdict (SI values; ``None`` where the summary has no value).
+
+    margin      MS = allowable / von Mises − 1 [–]
+    passed      MS ≥ 0 (None when no allowable or no stress)
+    marginal    |MS| within the peak's relative error estimate
+    """
+
+    name: str
+    von_mises_pa: float | None
+    max_principal_pa: float | None
+    time_s: float | None
+    location_m: list | None
+    error_rel: float | None
+    allowable_pa: float | None
+    allowable_source: str
+    margin: float | None
+    passed: bool | None
+    marginal: bool
+
+
+@dataclass(frozen=True)
+class Item:
+    """A labelled line of the missile / flight part of the verdict: label, value text, note."""
+
+    label: str
+    value: str
+    note: str = ""
+    bad: bool = False
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """What the top of the report shows."""
+
+    overall: str                      # PASS | FAIL | INCOMPLETE
+    overall_reason: str
+    fins: tuple[FinVerdict, ...]
+    missile: tuple[Item, ...]
+    flight: tuple[Item, ...]
+    warnings: tuple[Warning_, ...] = field(default_factory=tuple)
+
+
+def margin_of_safety(allowable_pa: float, stress_pa: float) -> float:
+    """MS = allowable / stress − 1 [–]; +inf for a zero stress."""
+    return math.inf if stress_pa <= 0.0 else allowable_pa / stress_pa - 1.0
+
+
+def _num(v) -> float | None:
+    return float(v) if isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) else None
+
+
+def fin_verdict(name: str, res: dict, yield_pa: float | None, yield_what: str) -> FinVerdict:
+    """A fin's verdict from its shell-summary entry (``allowable_pa`` first, else yield)."""
+    vm, allow = _num(res.get("peak_von_mises_pa")), _num(res.get("allowable_pa"))
+    if allow is not None:
+        source = "shell summary allowable_pa"
+    elif yield_pa is not None:
+        allow, source = yield_pa, f"yield strength of {yield_what} (resolved.json case.missile.material)"
+    else:
+        source = f"none: {yield_what}"
+    err = _num(res.get("peak_error_estimate_rel"))
+    ms = margin_of_safety(allow, vm) if allow is not None and vm is not None else None
+    return FinVerdict(
+        name=name, von_mises_pa=vm, max_principal_pa=_num(res.get("peak_max_principal_pa")),
+        time_s=_num(res.get("peak_time_s")), location_m=res.get("peak_location_m"),
+        error_rel=err, allowable_pa=allow, allowable_source=source, margin=ms,
+        passed=None if ms is None else ms >= 0.0,
+        marginal=ms is not None and err is not None and math.isfinite(ms) and abs(ms) <= err)
+
+
+def _walk_warnings(stage: str, node: Any, path: str, out: list[Warning_]) -> None:
+    """Collect ``warnings`` lists, tunnelling flags, energy errors over tolerance and
+    ``converged: false`` flags at any depth of a summary section."""
+    if not isinstance(node, dict):
+        return
+    where = f" ({path})" if path else ""
+    tol = _num(node.get("energy_tolerance_rel")) or ENERGY_TOL_REL
+    for key, v in node.items():
+        if key in WARNING_KEYS and isinstance(v, list):
+            out.extend(Warning_(stage, f"{str(w)}{where}") for w in v)
+        elif key in TUNNELLING_KEYS and v is True:
+            n = node.get("segment_crossings_unresolved")
+            extra = f": {n} rope-segment crossings not resolved" if isinstance(n, int) else ""
+            out.append(Warning_(stage, f"tunnelling{where}: ropes passed through the missile "
+                                       f"surface unresisted{extra}"))
+        elif key == "energy_error_rel" and _num(v) is not None and abs(v) > tol:
+            out.append(Warning_(stage, f"energy balance error {abs(v):.3g} exceeds the tolerance "
+                                       f"{tol:.3g}{where}"))
+        elif key == "converged" and v is False:
+            out.append(Warning_(stage, f"not converged{where}"))
+        elif isinstance(v, dict):
+            _walk_warnings(stage, v, f"{path}.{key}" if path else key, out)
+
+
+def collect_warnings(run: RunData, fins: tuple[FinVerdict, ...]) -> list[Warning_]:
+    """Every warning of the run, in stage order: status failures, stages not finished, the
+    summary's own warnings and flags, unconverged peaks, loaded fins without a shell result."""
+    out: list[Warning_] = []
+    for s in run.stages:
+        if s.state == "failed":
+            out.append(Warning_(s.name, f"stage FAILED: {s.error or '(no error recorded)'}"))
+        elif s.state == "running":
+            out.append(Warning_(s.name, "stage still 'running' in status.json: running now, or "
+                                        "interrupted (killed) — its files may be partial"))
+        elif s.state in ("pending", "unknown") and s.requested:
+            out.append(Warning_(s.name, f"requested by the case but '{s.state}': no result"))
+        elif s.state == "done" and s.section is None:
+            out.append(Warning_(s.name, "done in status.json but summary.json has no section"))
+        if s.complete:
+            _walk_warnings(s.name, s.section, "", out)
+    for note in run.notes:
+        if "case hash" in note:
+            out.append(Warning_("run", note + " (stale results)"))
+    for f in fins:
+        if f.error_rel is not None and f.error_rel > PEAK_ERROR_TOL_REL:
+            out.append(Warning_("shell", f"fin {f.name}: peak stress error estimate {f.error_rel:.3g} "
+                                         f"> {PEAK_ERROR_TOL_REL:.3g} (unconverged peak)"))
+        if f.marginal:
+            out.append(Warning_("shell", f"fin {f.name}: margin of safety {f.margin:+.3g} lies within "
+                                         f"the peak's error estimate ±{f.error_rel:.3g}: PASS/FAIL is "
+                                         "not decided by this resolution"))
+    out.extend(_unsolved_loaded_fins(run))
+    return out
+
+
+def _unsolved_loaded_fins(run: RunData) -> list[Warning_]:
+    """Fins the collide stage loaded (impulse > 0) that have no shell result."""
+    summ = run.summary or {}
+    impulses = (summ.get("collide") or {}).get("fin_impulse_ns")
+    shell = next((s for s in run.stages if s.name == "shell"), None)
+    if not isinstance(impulses, dict) or shell is None or not shell.complete:
+        return []
+    solved = set(fin_results(shell.section))
+    return [Warning_("shell", f"fin {n} received {v:.3g} N·s of contact impulse but has no shell result")
+            for n, v in impulses.items() if _num(v) and v > 0 and n not in solved]
+
+
+def _missile_items(run: RunData) -> list[Item]:
+    """Δv, (filtered) peak acceleration, impulse, contact duration, pass-through / capture."""
+    from flexnet_fe.report.units import unit_of, with_unit
+
+    stage = next((s for s in run.stages if s.name == "collide"), None)
+    if stage is None or not stage.complete:
+        return [Item("collision", "no result", f"collide stage {stage.state if stage else 'absent'}", True)]
+    c = stage.section
+    items = []
+    if _num(c.get("delta_v_mps")) is not None:
+        items.append(Item("Δv of the missile", with_unit(c["delta_v_mps"], unit_of("delta_v_mps")),
+                          "collide summary delta_v_mps"))
+    elif _num(c.get("dv_over_v")) is not None:
+        v0 = _num(((run.case.get("collide") or {}).get("impact_speed")))
+        if v0 is not None:
+            items.append(Item("Δv of the missile", with_unit(c["dv_over_v"] * v0, unit_of("_mps")),
+                              f"= dv_over_v {c['dv_over_v']:.4g} × impact speed {v0:.4g} m/s (resolved.json)"))
+        else:
+            items.append(Item("|Δv| / v", f"{c['dv_over_v']:.4g}", "impact speed not in resolved.json"))
+    if _num(c.get("peak_accel_mps2")) is not None:
+        cfc = c.get("cfc")
+        note = (f"SAE J211 CFC {cfc} filtered" if cfc is not None else
+                "NOT CFC-filtered: mean over each output interval of collide/history.csv")
+        t = _num(c.get("peak_accel_time_s"))
+        when = f" at {t * 1e3:.4g} ms" if t is not None else ""
+        items.append(Item("peak CG acceleration", with_unit(c["peak_accel_mps2"], unit_of("_mps2")) + when, note))
+    for key, label in (("impulse_ns", "impulse on the missile"), ("contact_duration_s", "contact duration")):
+        if _num(c.get(key)) is not None:
+            items.append(Item(label, with_unit(c[key], unit_of(key)), f"collide summary {key}"))
+    if isinstance(c.get("passed_through"), bool):
+        items.append(Item("net", "passed through" if c["passed_through"] else "captured / carried forward",
+                          "collide summary passed_through"))
+    return items
+
+
+def _flight_items(run: RunData) -> list[Item]:
+    """Hit or miss, miss distance against the lethal radius, and the damage the flight used."""
+    stage = next((s for s in run.stages if s.name == "flight"), None)
+    if stage is None:
+        return []
+    if not stage.complete:
+        return [Item("flight outcome", "no result", f"flight stage {stage.state}", True)]
+    f = stage.section
+    items = []
+    miss, lethal = _num(f.get("miss_distance_m")), _num(f.get("lethal_radius_m"))
+    if isinstance(f.get("hit"), bool):
+        text = "HIT" if f["hit"] else "MISS"
+        detail = (f"miss distance {miss:.4g} m {'≤' if f['hit'] else '>'} lethal radius {lethal:.4g} m"
+                  if miss is not None and lethal is not None else "")
+        items.append(Item("missile against the aircraft", text, detail, bad=f["hit"]))
+    dmg = f.get("damage_from_shell")
+    wing = _num(f.get("wing_damage"))
+    if isinstance(dmg, dict):
+        frac = dmg.get("overstressed_area_fraction") or {}
+        parts = ", ".join(f"{k} {100 * v:.3g} %" for k, v in frac.items() if _num(v))
+        allow = _num(dmg.get("allowable_stress_pa"))
+        note = (f"fin area above {allow * 1e-6:.4g} MPa: {parts or 'none'}" if allow is not None else parts)
+        items.append(Item("damage used by the flight (from the shell stage)",
+                          f"wing damage {100 * wing:.3g} %" if wing is not None else "—", note))
+    elif wing is not None:
+        items.append(Item("damage used by the flight", f"wing damage {100 * wing:.3g} %", "from the case file"))
+    return items
+
+
+def build_verdict(run: RunData) -> Verdict:
+    """The verdict of a run directory (see the module doc)."""
+    yield_pa, yield_what = yield_strength(run.case)
+    shell = next((s for s in run.stages if s.name == "shell"), None)
+    fins = tuple(fin_verdict(n, r, yield_pa, yield_what)
+                 for n, r in (fin_results(shell.section).items() if shell and shell.complete else []))
+    warnings = collect_warnings(run, fins)
+    failed = [f.name for f in fins if f.passed is False]
+    undecided = [f.name for f in fins if f.passed is None]
+    if failed:
+        overall, reason = "FAIL", "margin of safety < 0 on " + ", ".join(failed)
+    elif shell is None or not shell.complete:
+        overall, reason = "INCOMPLETE", f"no fin stresses (shell stage {shell.state if shell else 'absent'})"
+    elif undecided or not fins:
+        overall, reason = "INCOMPLETE", ("no allowable for " + ", ".join(undecided)) if undecided else "no fin loaded"
+    else:
+        overall, reason = "PASS", "margin of safety ≥ 0 on every solved fin"
+    if overall != "INCOMPLETE" and any(f.marginal for f in fins):
+        reason += " (some margins lie within the error estimate: see the warnings)"
+    return Verdict(overall=overall, overall_reason=reason, fins=fins, missile=tuple(_missile_items(run)),
+                   flight=tuple(_flight_items(run)), warnings=tuple(warnings))

@@ -1,0 +1,136 @@
+"""Units table, verdict arithmetic and the energy balance, on hand-made inputs.
+
+References: the SI prefixes; MS = allowable / σ − 1 by hand; the glstat balance
+total − external work − total(0) of terms chosen so that it is known in closed form.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from flexnet_fe.report.energy import classify, energy_table
+from flexnet_fe.report.units import (NO_UNIT, axis_unit, format_value, plain_log_axis, unit_label, unit_of,
+                                     unknown_units, with_unit)
+from flexnet_fe.report.verdict import fin_verdict, margin_of_safety
+
+
+@pytest.mark.parametrize("key, label, scale", [
+    ("max_area_m2", "m²", 1.0), ("dt_s", "s", 1.0), ("peak_accel_mps2", "m/s²", 1.0),
+    ("shell.wing_1.peak_von_mises_pa", "MPa", 1e-6), ("max_penetration_m", "m", 1.0),
+    ("max_achieved_accel_g", "g (load factor)", 1.0), ("dofs", "count", 1.0), ("dv_over_v", "–", 1.0),
+    ("collide.fin_impulse_ns.wing_1", "N·s", 1.0), ("impulse_ns", "N·s", 1.0),
+    ("flight.autopilot.k_a_s_per_m", "s/m", 1.0), ("flight.ns_per_step", "ns", 1.0),
+    ("collide.contact_stiffness", "N/m^m (m = contact exponent)", 1.0),
+    ("collide.max_attitude_change_rad", "mrad", 1e3), ("omega_body_x_rps", "rad/s", 1.0),
+    ("alpha_body_x_rps2", "rad/s²", 1.0), ("collide.segment_crossings_unresolved", "count", 1.0),
+    ("flight.damage_from_shell.overstressed_area_fraction.wing_1", "–", 1.0),
+    ("collide.delta_v_axis_mps", "m/s", 1.0), ("collide.contact_duration_s", "s", 1.0)])
+def test_unit_table(key, label, scale):
+    u = unit_of(key)
+    assert (u.label, u.scale) == (label, scale)
+
+
+def test_unknown_unit_is_flagged_not_guessed():
+    assert unit_of("mystery_number") is NO_UNIT
+    assert unknown_units({"a.mystery_number": 3.0, "a.flag": True, "a.name": "x", "a.dt_s": 1.0}) == ["a.mystery_number"]
+    assert unit_label("hit", True) == "" and unit_label("dt_s", 1.0) == "s"
+    assert with_unit(541.6e6, unit_of("x_pa")) == "541.6 MPa"
+    assert format_value(None) == "—" and format_value(True) == "yes"
+
+
+@pytest.mark.parametrize("peak, label, scale", [
+    (4.5e-5, "µrad", 1e6), (3e-2, "mrad", 1e3), (2.0, "rad", 1.0), (0.0, "rad", 1.0)])
+def test_axis_unit_prefix(peak, label, scale):
+    u = axis_unit("attitude_change_rad", peak)
+    assert (u.label, u.scale) == (label, scale)
+    assert axis_unit("x_j", 2.5e4).label == "kJ" and axis_unit("x_pa", 5e8).label == "MPa"
+
+
+def test_plain_log_ticks():
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots()
+    ax.set_yscale("log")
+    ax.set_ylim(0.5, 40.0)
+    plain_log_axis(ax.yaxis)
+    fig.canvas.draw()
+    labels = [t.get_text() for t in ax.get_yticklabels() if t.get_text()]
+    minor = [t.get_text() for t in ax.yaxis.get_minorticklabels() if t.get_text()]
+    plt.close(fig)
+    assert "1" in labels and "10" in labels and not any("times" in s or "^" in s for s in labels)
+    assert minor == []                                    # no '4×10⁰' minor labels
+
+
+def test_margin_of_safety_and_allowable_source():
+    assert margin_of_safety(503e6, 541.6e6) == pytest.approx(503 / 541.6 - 1)   # −0.0713
+    assert margin_of_safety(1.0, 0.0) == math.inf
+    own = fin_verdict("f", {"peak_von_mises_pa": 250e6, "allowable_pa": 300e6}, 503e6, "Al")
+    assert own.allowable_pa == 300e6 and own.allowable_source == "shell summary allowable_pa"
+    assert own.margin == pytest.approx(0.2) and own.passed and not own.marginal
+    fallback = fin_verdict("f", {"peak_von_mises_pa": 600e6, "peak_error_estimate_rel": 0.05}, 503e6, "Al")
+    assert fallback.allowable_pa == 503e6 and "yield strength of Al" in fallback.allowable_source
+    assert fallback.passed is False and not fallback.marginal          # MS = −0.162, |MS| > 5 %
+    none = fin_verdict("f", {"peak_von_mises_pa": 600e6}, None, "no material")
+    assert none.margin is None and none.passed is None
+
+
+def test_energy_classes_and_balance():
+    assert [classify(c) for c in ("net_kinetic_j", "strain_energy_j", "contact_energy_j", "friction_j",
+                                  "external_work_j", "energy_balance_j", "hub_j")] == \
+        ["kinetic", "internal", "contact", "dissipated", "external_work", "balance", "other"]
+    t = np.linspace(0.0, 1.0, 5)
+    # KE 10 → 4, IE 0 → 3, dissipated 0 → 2, work 0 → 1: total − W − total(0) = −2 t·... closed form
+    h = {"t_s": t, "kinetic_j": 10 - 6 * t, "elastic_j": 3 * t, "damping_j": 2 * t, "external_work_j": 1 * t}
+    tab = energy_table("x", h)
+    np.testing.assert_allclose(tab.total_j, 10 - t)
+    np.testing.assert_allclose(tab.balance_j, -2 * t)             # (10 − t) − t − 10
+    assert tab.balance_from == "report"
+    np.testing.assert_allclose(tab.error_rel, -2 * t / 10.0)      # scale = max |total| = 10 J
+    h["energy_balance_j"] = 0.5 * t                               # the stage's own balance wins
+    tab = energy_table("x", h)
+    assert tab.balance_from == "energy_balance_j"
+    np.testing.assert_allclose(tab.balance_j, 0.5 * t)
+    assert energy_table("x", {"t_s": t, "area_m2": t}) is None
+
+
+def test_new_contract_keys_in_the_verdict(tmp_path):
+    """The keys the rewritten stages add (brief: window-free collide keys, CFC peak, per-fin
+    allowable, nested warnings, stage energy balance) are shown, not crashed on."""
+    from flexnet_fe.io import atomic_write_json, write_history_csv
+    from flexnet_fe.report import build_report
+
+    from .synthetic import parse_html
+
+    run = tmp_path / "run"
+    atomic_write_json(run / "resolved.json", {"case": {"case": {"name": "n", "stages": ["collide", "shell"]},
+                                                       "collide": {"impact_speed": 500.0}}})
+    atomic_write_json(run / "status.json", {"case": "n", "stages": {"collide": {"state": "done"},
+                                                                    "shell": {"state": "done"}}})
+    atomic_write_json(run / "summary.json", {
+        "collide": {"peak_accel_mps2": 700.0, "cfc": 1000, "delta_v_mps": 0.0381, "delta_v_axis_mps": [0.038, 0, 0],
+                    "impulse_ns": 8.8, "fin_impulse_ns": {"wing_1": 3.9}, "contact_duration_s": 0.0081,
+                    "passed_through": False, "energy_error_rel": 0.01, "warnings": []},
+        "shell": {"wing_1": {"peak_von_mises_pa": 400e6, "peak_time_s": 3e-3, "peak_location_m": [0, 0, 0],
+                             "peak_max_principal_pa": 410e6, "allowable_pa": 450e6, "peak_error_estimate_rel": 0.02,
+                             "warnings": ["peak at a re-entrant corner"]}}})
+    t = np.linspace(0, 1e-3, 5)
+    write_history_csv(run / "collide" / "history.csv", {"t_s": t, "missile_kinetic_j": 100 - t * 1e4,
+                                                        "net_kinetic_j": t * 1e4, "energy_balance_j": 1e-3 * t})
+    html = build_report(run, pictures=False).read_text()
+    tree = parse_html(html)
+    missile = {r[0]: r[1:] for r in tree.tables["verdict-missile"][1:]}
+    assert missile["Δv of the missile"][0] == "0.0381 m/s"
+    assert "CFC 1000 filtered" in missile["peak CG acceleration"][1]
+    assert missile["impulse on the missile"][0] == "8.8 N·s"
+    assert missile["contact duration"][0] == "0.0081 s"
+    assert missile["net"][0] == "captured / carried forward"
+    fin = dict(zip(tree.tables["verdict-fins"][0], tree.tables["verdict-fins"][1]))
+    assert fin["allowable from"] == "shell summary allowable_pa" and fin["verdict"] == "PASS"
+    assert "peak at a re-entrant corner (wing_1)" in html            # nested warning in the box
+    energy = {r[0]: r for r in tree.tables["energy-table"][1:]}
+    assert energy["collide"][1] == "energy_balance_j"                 # the stage's own balance
