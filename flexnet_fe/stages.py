@@ -44,7 +44,7 @@ def flight(ctx: StageContext) -> dict:
 
     c = ctx.case
     shell_dir = ctx.stage_output("shell") if c.flight.damage_from_shell else None
-    return run_flight(c.flight, c.atmosphere.altitude, ctx.stage_dir, ctx.log, shell_dir)
+    return run_flight(c.flight, c.atmosphere.altitude, ctx.stage_dir, ctx.log, shell_dir, missile=c.missile)
 
 
 STAGE_FUNCS = {Stage.deploy: deploy, Stage.collide: collide, Stage.shell: shell, Stage.flight: flight}
