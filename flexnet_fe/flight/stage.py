@@ -208,7 +208,10 @@ class FlightResult:
     """name (simulate.DIAG_COLUMNS) → values, each shape (m,)"""
     closest_approach_found: bool
     miss_distance_m: float
+    """at the closest approach; else the smallest sampled range"""
     time_of_closest_approach_s: float
+    end_reason: str
+    """why the engagement ended (closest approach, t_end, Mach below the aero model's range)"""
     autopilot: Autopilot
     fins: FinDamage
     model: DamageModel
@@ -267,9 +270,10 @@ def simulate_flight(flight: FlightConfig, altitude_m: float, missile: MissileCon
     if status == S.STATUS_OUT_OF_AIR_TABLE:
         raise NumericalError(f"missile left the tabulated altitude band (scene altitude ± "
                              f"{AIR_TABLE_HALF_RANGE_M:.0f} m) at t = {t_b:.3f} s")
-    if status == S.STATUS_SUBSONIC:
-        raise NumericalError(f"missile Mach fell below {af.mach_min:.2f} at t = {t_b:.3f} s: a fin leading "
-                             "edge turns subsonic, outside the airframe's supersonic panel theory")
+    end_reason = {S.STATUS_CLOSEST: "closest approach", S.STATUS_T_END: f"t_end = {flight.t_end:g} s reached",
+                  S.STATUS_SUBSONIC: f"Mach fell below {af.mach_min:.2f} at t = {t_b:.3f} s (a fin leading edge turns "
+                                     "subsonic: outside the supersonic panel theory; the missile has lost its "
+                                     "speed and cannot reach the target)"}[status]
     diag = dict(zip(S.DIAG_COLUMNS, diags.T))
     found = status == S.STATUS_CLOSEST
     if found:
@@ -281,7 +285,7 @@ def simulate_flight(flight: FlightConfig, altitude_m: float, missile: MissileCon
     else:  # no closest approach before t_end: report the smallest sampled range
         i = int(np.argmin(diag["range_m"]))
         t_ca, miss = float(times[i]), float(diag["range_m"][i])
-    return FlightResult(times, states, diag, found, miss, t_ca, ap, fins, damage.model, facts, poles,
+    return FlightResult(times, states, diag, found, miss, t_ca, end_reason, ap, fins, damage.model, facts, poles,
                         flight.dt, dt_crit, int(round(t_b / flight.dt)), wall)
 
 
@@ -334,6 +338,7 @@ def flight_summary(res: FlightResult, flight: FlightConfig) -> dict:
         "hit_within_m": {f"{r:g}": bool(res.closest_approach_found and res.miss_distance_m <= r)
                          for r in REPORT_RADII_M},
         "closest_approach_found": res.closest_approach_found,
+        "end_reason": res.end_reason,
         "time_of_closest_approach_s": res.time_of_closest_approach_s,
         "max_achieved_accel_g": float(acc.max() / G0),
         "max_total_incidence_deg": float(np.degrees(alpha_t.max())),
@@ -386,6 +391,9 @@ def run_flight(flight: FlightConfig, altitude_m: float, stage_dir: Path, log: lo
     log.info("flight: miss %.3f m at t = %.3f s (%s, lethal radius %.1f m), max accel %.1f g, max incidence %.1f deg",
              res.miss_distance_m, res.time_of_closest_approach_s, "hit" if summary["hit"] else "miss",
              flight.lethal_radius, summary["max_achieved_accel_g"], summary["max_total_incidence_deg"])
+    if not res.closest_approach_found:
+        warnings.append(f"flight: no closest approach: {res.end_reason}; miss_distance_m is the smallest range flown")
+        log.warning(warnings[-1])
     if summary["max_total_incidence_deg"] > 30.0:
         warnings.append(f"flight: total incidence reached {summary['max_total_incidence_deg']:.0f} deg, beyond the "
                         "linear aerodynamics' range; the trajectory after that is qualitative")

@@ -14,7 +14,7 @@ CASES = Path(__file__).resolve().parents[2] / "cases"
 @pytest.mark.parametrize("name, wing, rudder, sweep", [
     ("flight_baseline", 0.0, 1.0, None),
     ("flight_wing_damage", 0.4, 1.0, "wing_damage"),
-    ("flight_rudder_damage", 0.0, 0.3, "rudder_effectiveness"),
+    ("flight_rudder_damage", 0.0, 0.2, "rudder_effectiveness"),
     ("flight_wing_sweep", 0.5, 1.0, "wing_damage"),
 ])
 def test_flight_case_loads(name, wing, rudder, sweep):
