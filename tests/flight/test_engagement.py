@@ -140,24 +140,27 @@ def test_6dof_pitch_step_response_matches_the_linear_three_loop_model():
     assert err < 5e-3, f"max |n_6dof − n_linear| = {err:.3e} m/s²"
 
 
-def test_damaged_loop_eigenvalues_explain_the_oscillation():
-    """Rudders at 30 % (geometry): the tail's stability is gone (static margin −0.4 calibres); the
-    fixed-gain loop is still stable but lightly damped. Its eigenvalues (actuator included) must
-    give the oscillation of the 6-DOF step response: frequency and decay of the dominant pair."""
+@pytest.mark.parametrize("rudder", [0.3, 0.2])
+def test_damaged_loop_eigenvalues_explain_the_oscillation(rudder):
+    """Rudders at 30 % / 20 % (geometry): the tail's stability is gone (static margin −0.4 / −0.7
+    calibres). With the fixed gains the loop is lightly damped at 30 % and oscillates unstably at
+    20 % (the paper's Fig. 21 behaviour). The loop's eigenvalues (actuator included) must give the
+    oscillation of the 6-DOF step response: frequency and growth/decay of the dominant pair."""
     from flexnet_fe.flight.autopilot import loop_matrix
     from flexnet_fe.flight.config import DamageConfig
 
-    times, diag, lin, g3, flight = _step_response(DamageConfig(rudder_effectiveness=0.3), t_end=2.0)
+    times, diag, lin, g3, flight = _step_response(DamageConfig(rudder_effectiveness=rudder), t_end=1.5)
     eig = np.linalg.eigvals(loop_matrix(lin, g3, flight.missile_speed,
                                         (flight.actuator.natural_frequency_rad_s, flight.actuator.damping)))
     dom = eig[np.argmax(np.where(np.abs(eig.imag) > 1e-6, eig.real, -np.inf))]   # slowest oscillatory pair
     assert lin.m_alpha > 0                                   # statically unstable airframe ...
-    assert np.all(eig.real < 0) and abs(dom.real) < 0.5 * abs(dom.imag)   # ... stable, lightly damped loop
+    assert abs(dom.real) < 0.5 * abs(dom.imag)               # ... lightly damped or growing loop
+    assert (dom.real > 0) == (rudder == 0.2)
     n = diag["accel_y_mps2"]
     n_lin = _linear_step(times, diag["accel_cmd_y_mps2"], lin, g3, flight)
     assert np.abs(n - n_lin).max() < 0.02 * np.abs(n).max()       # the linear loop is the 6-DOF's loop
     # Measured from the 6-DOF history alone: fit c0 + c1 e^{σ1 t} + e^{σ t}(A cos ωt + B sin ωt) on
-    # t ∈ [0.1, 2] s (the actuator pair, Re λ ≈ −100 1/s, has decayed by e^-10), started 30 % off
+    # t ∈ [0.1, 1.5] s (the actuator pair, Re λ ≈ −100 1/s, has decayed by e^-10), started 30 % off
     # the eigenvalues; σ, ω must come out as the dominant pair's Re λ, Im λ.
     from scipy.optimize import curve_fit
 
