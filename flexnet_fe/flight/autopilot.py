@@ -201,16 +201,14 @@ def open_loop_at_actuator(lin: AirframeLinear, g: ThreeLoopGains, speed: float, 
     """Loop transfer L(jω) broken at the fin command (closed loop: 1 + L = 0), shape like omega:
     L = −K_R [(1 + ω_I/s) q(s) + (ω_I K_A/s) n_L(s)]/δ(s) × A(s) with A the actuator (or 1)."""
     za, zd, ma, md, mq = lin.z_alpha, lin.z_delta, lin.m_alpha, lin.m_delta, lin.m_q
-    a = np.array([[za, 1.0], [ma, mq]])
-    b = np.array([zd, md])
-    out = np.empty(len(omega), dtype=complex)
-    for k, w in enumerate(omega):
-        s = 1j * w
-        alpha, q = np.linalg.solve(s * np.eye(2) - a, b)          # response to δ = 1
-        n_l = -speed * (za * alpha + zd)
-        act = 1.0 if actuator is None else actuator[0] ** 2 / (s * s + 2 * actuator[1] * actuator[0] * s + actuator[0] ** 2)
-        out[k] = -g.k_r * ((1 + g.omega_i / s) * q + g.omega_i * g.k_a / s * n_l) * act
-    return out
+    s = 1j * np.asarray(omega, dtype=float)
+    # (sI − A)⁻¹ b for A = [[Z_α, 1], [M_α, M_q]], b = (Z_δ, M_δ), by Cramer's rule
+    det = (s - za) * (s - mq) - ma
+    alpha = ((s - mq) * zd + md) / det
+    q = (ma * zd + (s - za) * md) / det
+    n_l = -speed * (za * alpha + zd)
+    act = 1.0 if actuator is None else actuator[0] ** 2 / (s * s + 2 * actuator[1] * actuator[0] * s + actuator[0] ** 2)
+    return -g.k_r * ((1 + g.omega_i / s) * q + g.omega_i * g.k_a / s * n_l) * act
 
 
 def loop_margins(lin: AirframeLinear, g: ThreeLoopGains, speed: float,
