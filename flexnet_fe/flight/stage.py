@@ -8,6 +8,7 @@ Public API:
 
 from __future__ import annotations
 
+import functools
 import logging
 import math
 import time
@@ -70,14 +71,18 @@ def damaged_airframe(af: AF.Airframe, model: DamageModel, fins: FinDamage) -> tu
     return af, CoefficientScale(1.0 - d, k_mom, e)
 
 
+@functools.lru_cache(maxsize=16)
 def air_table(altitude_m: float) -> S.AirTable:
     """ISA (``flexnet_fe.atmosphere.isa``) density and speed of sound tabulated every 100 m over
-    ±15 km around the scene altitude (clipped to ISA's −5 km ... 80 km)."""
+    ±15 km around the scene altitude (clipped to ISA's −5 km ... 80 km). Cached per altitude
+    (≈ 300 ISA calls; the arrays are read-only)."""
     lo = max(altitude_m - AIR_TABLE_HALF_RANGE_M, -5000.0)
     hi = min(altitude_m + AIR_TABLE_HALF_RANGE_M, 80000.0)
     airs = [isa(h) for h in np.arange(lo, hi + 0.5 * AIR_TABLE_STEP_M, AIR_TABLE_STEP_M)]
-    return S.AirTable(float(lo), AIR_TABLE_STEP_M, np.array([a.density for a in airs]),
-                      np.array([a.speed_of_sound for a in airs]))
+    rho, sound = np.array([a.density for a in airs]), np.array([a.speed_of_sound for a in airs])
+    rho.setflags(write=False)
+    sound.setflags(write=False)
+    return S.AirTable(float(lo), AIR_TABLE_STEP_M, rho, sound)
 
 
 @dataclass(frozen=True)

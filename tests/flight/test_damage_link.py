@@ -77,7 +77,7 @@ def test_damage_fractions_and_stage_use_them(tmp_path):
                                                       "rudder_2": {"allowable_pa": 700e6}}})
     fins, link = damage_from_shell(shell, DamageLawConfig(law="overstressed_area"), mat)
     assert link["allowable_pa"]["wing_1"] == 700e6 and fins.remaining[0] == 1.0
-    flight = FlightConfig(dt=2e-4, output_dt=2e-3, damage_from_shell=True,
+    flight = FlightConfig(dt=5e-4, output_dt=5e-3, damage_from_shell=True,
                           damage_law=DamageLawConfig(law="overstressed_area", threshold_factor=0.5))
     summary = run_flight_in(tmp_path / "flight", flight, shell)           # 350 MPa: half of wing_1 lost
     assert summary["wing_damage"] == pytest.approx(0.125)

@@ -55,7 +55,7 @@ def test_step_above_rk4_limit_is_refused():
 
 
 def test_stage_writes_history_plots_summary_and_sweep(tmp_path):
-    flight = FlightConfig(dt=2e-4, output_dt=2e-3,
+    flight = FlightConfig(dt=5e-4, output_dt=5e-3,      # coarse: a wiring test (step halving is tested above)
                           sweep=SweepConfig(parameter="rudder_effectiveness", values=(1.0, 0.0)))
     summary = run_flight(flight, ALT, tmp_path, logging.getLogger("test.flight"))
     json.dumps(summary, allow_nan=False)
@@ -63,7 +63,7 @@ def test_stage_writes_history_plots_summary_and_sweep(tmp_path):
                 "max_achieved_accel_g", "wall_s"):
         assert key in summary
     h = read_history_csv(tmp_path / "history.csv")
-    assert h["t_s"][-1] == pytest.approx(summary["time_of_closest_approach_s"], abs=2e-4)
+    assert h["t_s"][-1] == pytest.approx(summary["time_of_closest_approach_s"], abs=5e-4)
     # the last recorded range brackets the interpolated miss (closest approach lies in the last step)
     assert h["range_m"][-1] >= summary["miss_distance_m"] - 1e-9
     for name in ("flight_trajectory.png", "flight_load.png", "flight_attitude.png", "flight_fins.png",
