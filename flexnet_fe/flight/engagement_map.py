@@ -99,38 +99,47 @@ def write_csv(rows: list[dict], path: Path) -> None:
 
 
 def plot_map(rows: list[dict], path: Path, lethal_radius: float = 5.0) -> Path:
-    """One panel per (case, incidence): aim points coloured by miss distance (log), circles = hit,
-    crosses = miss, labels = the smallest fin margin."""
+    """One panel per (case, incidence) — rows = cases (net types), columns = incidences: aim
+    points coloured by miss distance (log), o = hit, X = miss, grey square = failed run; labels =
+    the smallest fin margin σ_allow/σ_peak − 1 and the damage flown (wing damage, rudder share)."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from matplotlib.colors import LogNorm
 
-    keys = sorted({(r["case"], r["incidence_deg"]) for r in rows})
-    fig, axs = plt.subplots(1, len(keys), figsize=(4.2 * len(keys), 4), squeeze=False)
+    cases = sorted({r["case"] for r in rows})
+    incs = sorted({r["incidence_deg"] for r in rows})
+    fig, axs = plt.subplots(len(cases), len(incs), figsize=(4.6 * len(incs), 3.9 * len(cases)), squeeze=False)
+    fig.subplots_adjust(wspace=0.35, hspace=0.45)
     norm = LogNorm(1e-2, 1e3)
     sc = None
-    for ax, (case, inc) in zip(axs[0], keys):
-        sel = [r for r in rows if (r["case"], r["incidence_deg"]) == (case, inc)]
-        for r in sel:
-            miss = r.get("miss_distance_m")
-            if r["error"] or miss is None:
-                ax.plot(r["aim_x_m"], r["aim_y_m"], "s", color="0.6", ms=12)
-                continue
-            sc = ax.scatter([r["aim_x_m"]], [r["aim_y_m"]], c=[max(miss, 1e-2)], norm=norm, cmap="viridis_r",
-                            marker="o" if miss <= lethal_radius else "X", s=160, edgecolors="k")
-            if r.get("min_fin_margin") is not None:
-                ax.annotate(f"{r['min_fin_margin']:+.2f}", (r["aim_x_m"], r["aim_y_m"]), textcoords="offset points",
-                            xytext=(0, 10), ha="center", fontsize=7)
-        ax.set_title(f"{case}, incidence {inc:g}°", fontsize=9)
-        ax.set_xlabel("aim x [m] (world)")
-        ax.set_ylabel("aim y [m] (world)")
-        ax.grid(True)
+    xs, ys = [r["aim_x_m"] for r in rows], [r["aim_y_m"] for r in rows]
+    pad = max(0.1, 0.15 * max(max(xs) - min(xs), max(ys) - min(ys)))
+    for i, case in enumerate(cases):
+        for j, inc in enumerate(incs):
+            ax = axs[i][j]
+            for r in (r for r in rows if (r["case"], r["incidence_deg"]) == (case, inc)):
+                miss = r.get("miss_distance_m")
+                if r["error"] or miss is None:
+                    ax.plot(r["aim_x_m"], r["aim_y_m"], "s", color="0.6", ms=12)
+                    continue
+                sc = ax.scatter([r["aim_x_m"]], [r["aim_y_m"]], c=[max(miss, 1e-2)], norm=norm, cmap="viridis_r",
+                                marker="o" if miss <= lethal_radius else "X", s=160, edgecolors="k")
+                label = f"m {r['min_fin_margin']:+.2f}" if r.get("min_fin_margin") is not None else ""
+                label += f"\nw {r.get('wing_damage') or 0:.2f} r {r.get('rudder_effectiveness') or 1:.2f}"
+                ax.annotate(label, (r["aim_x_m"], r["aim_y_m"]), textcoords="offset points", xytext=(0, 11),
+                            ha="center", fontsize=7)
+            ax.set_xlim(min(xs) - pad, max(xs) + pad)
+            ax.set_ylim(min(ys) - pad, max(ys) + 2 * pad)
+            ax.set_title(f"{case}, incidence {inc:g}°", fontsize=9)
+            ax.set_xlabel("aim x [m] (world frame W)")
+            ax.set_ylabel("aim y [m]")
+            ax.grid(True)
     if sc is not None:
-        fig.colorbar(sc, ax=axs[0].tolist(), label="miss distance [m] (o hit, X miss; grey = failed)")
-    fig.suptitle("Engagement map: flight outcome after the net impact; labels = min fin margin σ_allow/σ_peak − 1",
-                 fontsize=9)
+        fig.colorbar(sc, ax=[a for row in axs for a in row], label="miss distance [m]")
+    fig.suptitle("Engagement map: o hit / X miss / grey failed; m = min fin margin σ_allow/σ_peak − 1, "
+                 "w = wing damage, r = rudder share kept", fontsize=9)
     fig.savefig(path, dpi=110)
     plt.close(fig)
     return path
