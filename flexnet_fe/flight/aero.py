@@ -84,6 +84,8 @@ def loads(af, scale, v_b, omega, fin_delta, qbar, beta_m):
             acc[part, 4] += m1 * x
             acc[part, 5] += m2 * x
         acc[1, 3] -= qs * af.dref * (omega[0] * af.dref / speed) * af.panel_roll_damp[i] / beta_m
-    force = scale.lift * acc[0, 0:3] + scale.control * acc[2, 0:3] + acc[1, 0:3]
-    moment = scale.moment * acc[0, 3:6] + scale.control * acc[2, 3:6] + acc[1, 3:6]
+    force, moment = np.empty(3), np.empty(3)
+    for k in range(3):
+        force[k] = scale.lift * acc[0, k] + scale.control * acc[2, k] + acc[1, k]
+        moment[k] = scale.moment * acc[0, 3 + k] + scale.control * acc[2, 3 + k] + acc[1, 3 + k]
     return force, moment
