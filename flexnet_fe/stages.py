@@ -72,7 +72,7 @@ def flight(ctx: StageContext) -> dict:
 
     c = ctx.case
     shell_dir = ctx.stage_output("shell") if Stage.shell in _flight_upstream(c) else None
-    return run_flight(c.flight, c.atmosphere.altitude, ctx.stage_dir, ctx.log, shell_dir)
+    return run_flight(c.flight, c.atmosphere.altitude, ctx.stage_dir, ctx.log, shell_dir, missile=c.missile)
 
 
 def _collide_upstream(case) -> tuple[Stage, ...]:
@@ -107,7 +107,7 @@ REGISTRY: dict[Stage, StageSpec] = {
                              _collide_upstream, collide),
     Stage.shell: StageSpec(("missile", "collide", "shell"), ("missile", "shell"),
                            lambda case: (Stage.collide,), shell, distributed=True),
-    Stage.flight: StageSpec(("flight",), ("atmosphere", "flight"), _flight_upstream, flight),
+    Stage.flight: StageSpec(("missile", "flight"), ("atmosphere", "missile", "flight"), _flight_upstream, flight),
 }
 
 STAGE_FUNCS = {s: spec.run for s, spec in REGISTRY.items()}

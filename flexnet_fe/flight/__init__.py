@@ -1,5 +1,12 @@
 """Flight stage: 6-DOF flight of the (damaged) missile against a turning aircraft (paper §VI).
 
+Modules: ``airframe`` (component build-up of the case's missile: nose, body, 8 fin panels;
+damage by panel), ``aero`` (the force law, pure), ``autopilot`` (three-loop design, loop
+margins), ``guidance``, ``target``, ``eom``, ``simulate`` (model data, pure right-hand side, RK4
+kernel), ``damage`` (fin stress → lost area), ``miss``, ``stage`` (the stage and its sweep),
+``plots``, ``engagement_map`` (outcome map over aim point × incidence × net, a driver over the
+pipeline).
+
 Frames used by this package (``flexnet_fe.frames`` leaves the flight frame to us)
 ----------------------------------------------------------------------------------
 Case frame P (what ``[flight]`` positions/directions and ``history.csv`` use)

@@ -1,145 +1,91 @@
-"""Aerodynamics of Zarchan's tail-controlled missile, extended to a cruciform 6-DOF airframe.
+"""Aerodynamic force and moment of the component airframe (``flexnet_fe.flight.airframe``).
 
-Reference: P. Zarchan, *Tactical and Strategic Missile Guidance*, 6th ed., AIAA 2012,
-ch. 21 (airframe: slender-body nose and body, linear supersonic wing and tail panels, Eqs. in
-Listings 21.2 / 23.1). Per plane (pitch: incidence α, yaw: α'), with β_M = √(M² − 1):
+Each component sees the local air velocity at its centre of pressure and gives a normal force
+along its own normal (pure functions, body axes, SI units):
 
-    C_N = 2 α + 1.5 (S_plan/S_ref) α_t α + 8 S_w α / (β_M S_ref) + 8 S_t (α + δ) / (β_M S_ref)
-    C_M = 2 α (x_cg − x_cpn)/d + 1.5 (S_plan/S_ref) α_t α (x_cg − x_cpb)/d
-          + 8 S_w α (x_cg − x_cpw)/(β_M S_ref d) + 8 S_t (α + δ)(x_cg − x_hl)/(β_M S_ref d)
+* nose:      F = −q̄ S 2 v_⊥/V                       at s_nose          (slender body)
+* cross-flow F = −q̄ S C_cf |v_⊥| v_⊥/V²            at s_crossflow     (Zarchan ch. 21)
+* panel i:   F = −q̄ S (a_i/β_M) (α_i + ρ_i + δ_i) n_i at its centroid c_i, and the carry-over
+             −q̄ S (c_i^B/β_M)(α_i + ρ_i + δ_i) n_i on the body axis at the same station,
+  with α_i = v_b·n_i/V (incidence), ρ_i = ((0, q, r) × c_i)·n_i/V (pitch/yaw-rate incidence:
+  the damping), δ_i the fin deflection of a rudder (a deflection δ about the fin's outward
+  axis e1 turns its normal to n + δ x̂_b, so it adds δ to the incidence); roll damping of panel i
+  M_x = −q̄ S d (p d/V) D_i/β_M (strip theory).
 
-(C_M positive nose-up about the plane's normal). Departures from Zarchan, and why:
-- Zarchan's airframe is a pitch-plane model; the yaw plane uses the same law (axisymmetric
-  cruciform missile). His body term 1.5 S_plan α²/S_ref becomes 1.5 S_plan α_t α/S_ref with the
-  total incidence α_t = √(α² + α'²), so the body cross-flow force points along the cross flow.
-- Zarchan has no roll channel. Roll control and roll damping come from the same linear
-  supersonic panel theory (normal-force slope 4/β_M per panel area, strip theory): each
-  triangular panel's force acts at its area centroid r_cp = d/2 + h/3 for control, and the roll
-  damping moment is −q (4/β_M)(p/V) Σ_panels ∫ c(r) r² dr.
-- Paper §VI damage multipliers act on whole-airframe derivatives (as the paper states them):
-  k_lift on every α-term of C_N (paper C_y^α, C_z^β), k_moment on every α-term of C_M
-  (m_z^α, m_y^β), k_ctrl on every δ-term (control force and moment). Roll damping of the wing
-  panels scales with k_lift, of the tail panels with k_ctrl (the paper does not say).
-
-The coefficients are a float64 array indexed by the constants below, so the numba kernel can
-read them; β_M divides the panel terms at run time.
+v_⊥ = (0, v_y, v_z) is the body's cross-flow velocity. With the paper's coefficient readings the
+α-, δ- and rate-parts are scaled separately: F = k_lift F_α + k_ctrl F_δ + F_rate,
+M = k_moment M_α + k_ctrl M_δ + M_rate (``flexnet_fe.flight.config.DamageModel``).
 """
 
 from __future__ import annotations
 
+import math
+from typing import NamedTuple
+
 import numpy as np
 from numba import njit
 
-from flexnet_fe.flight.config import AirframeConfig
 
-CN_NOSE = 0
-"""slender-body nose normal-force slope (2) [-]"""
-CN_WING = 1
-"""8 S_w / S_ref (× 1/β_M) [-]"""
-CN_TAIL = 2
-"""8 S_t / S_ref (× 1/β_M) [-]"""
-CN_BODY = 3
-"""1.5 S_plan / S_ref [-]"""
-ARM_NOSE = 4
-"""(x_cg − x_cp,nose)/d [-]"""
-ARM_WING = 5
-"""(x_cg − x_cp,wing)/d [-]"""
-ARM_TAIL = 6
-"""(x_cg − x_hinge)/d [-]"""
-ARM_BODY = 7
-"""(x_cg − x_cp,body)/d [-]"""
-CL_DELTA = 8
-"""roll-control coefficient per rad of mean fin deflection (× 1/β_M) [-]; negative"""
-ROLL_DAMP_WING = 9
-"""16 ∫c r² dr of one wing panel: M_x = −q (p/V)/β_M Σ [m^4]"""
-ROLL_DAMP_TAIL = 10
-"""same for one tail panel [m^4]"""
-CA = 11
-"""axial force coefficient [-]"""
-SREF = 12
-"""reference area π d²/4 [m^2]"""
-DREF = 13
-"""reference length d [m]"""
-N_AERO = 14
+class CoefficientScale(NamedTuple):
+    """Multipliers of the whole-airframe α-, δ-terms (paper §VI readings; 1, 1, 1 = geometry)."""
 
-
-def triangle_panel_r2_integral(root_chord: float, span: float, r0: float) -> float:
-    """∫_0^h c(s) (r0 + s)² ds for a panel with chord c(s) = c_r (1 − s/h) [m^4]
-    (closed form: c_r (r0² h/2 + r0 h²/3 + h³/12))."""
-    h = span
-    return root_chord * (r0 * r0 * h / 2 + r0 * h * h / 3 + h ** 3 / 12)
-
-
-def aero_coefficients(af: AirframeConfig) -> np.ndarray:
-    """Zarchan ch. 21 coefficient set of airframe ``af`` (see module doc), shape (N_AERO,)."""
-    d, L, ln = af.diameter, af.length, af.nose_length
-    sref = np.pi * d * d / 4
-    s_wing = 0.5 * af.wing_span * af.wing_root_chord          # one panel, tip chord 0
-    s_tail = 0.5 * af.tail_span * af.tail_root_chord
-    s_plan = (L - ln) * d + 0.67 * ln * d                     # Zarchan: (L-Ln) d + 1.33 Ln d / 2
-    a_nose = 0.67 * ln * d
-    a_body = (L - ln) * d
-    x_cpn = 2 * ln / 3
-    x_cpb = (0.67 * a_nose * ln + a_body * (ln + 0.5 * (L - ln))) / (a_nose + a_body)
-    x_cpw = af.wing_root_le + 0.7 * af.wing_root_chord        # Zarchan: +0.7 C_r − 0.2 C_t, C_t = 0
-    r0 = d / 2
-    r_cp_tail = r0 + af.tail_span / 3                         # centroid of the triangular panel
-    a = np.zeros(N_AERO)
-    a[CN_NOSE] = 2.0
-    a[CN_WING] = 8 * s_wing / sref
-    a[CN_TAIL] = 8 * s_tail / sref
-    a[CN_BODY] = 1.5 * s_plan / sref
-    a[ARM_NOSE] = (af.x_cg - x_cpn) / d
-    a[ARM_WING] = (af.x_cg - x_cpw) / d
-    a[ARM_TAIL] = (af.x_cg - af.x_hinge) / d
-    a[ARM_BODY] = (af.x_cg - x_cpb) / d
-    # 4 panels × (4/β) S_t/S_ref × r_cp/d, sign: a positive mean deflection rolls negatively
-    # (frame doc in flexnet_fe.flight).
-    a[CL_DELTA] = -16 * s_tail * r_cp_tail / (sref * d)
-    a[ROLL_DAMP_WING] = 16 * triangle_panel_r2_integral(af.wing_root_chord, af.wing_span, r0)
-    a[ROLL_DAMP_TAIL] = 16 * triangle_panel_r2_integral(af.tail_root_chord, af.tail_span, r0)
-    a[CA] = af.axial_force_coefficient
-    a[SREF] = sref
-    a[DREF] = d
-    return a
-
-
-def inertia_diagonal(af: AirframeConfig) -> np.ndarray:
-    """(I_xx, I_yy, I_zz) [kg m^2], shape (3,): Zarchan's I_yy = m (3 r² + L²)/12 and a solid
-    cylinder's I_xx = m r²/2 unless the case gives them."""
-    r = af.diameter / 2
-    iyy = af.pitch_inertia if af.pitch_inertia is not None else af.mass * (3 * r * r + af.length ** 2) / 12
-    ixx = af.roll_inertia if af.roll_inertia is not None else af.mass * r * r / 2
-    return np.array([ixx, iyy, iyy])
+    lift: float
+    moment: float
+    control: float
 
 
 @njit(cache=True)
 def supersonic_beta(mach):
     """β_M = √(M² − 1) of linear supersonic theory [-]; valid for M > 1."""
-    return np.sqrt(mach * mach - 1.0)
+    return math.sqrt(mach * mach - 1.0)
 
 
 @njit(cache=True)
-def plane_coefficients(alpha, alpha_total, delta, beta_m, a, k_lift, k_moment, k_ctrl):
-    """(C_N, C_M) of one plane (Zarchan ch. 21 law in the module doc, with damage multipliers).
+def loads(af, scale, v_b, omega, fin_delta, qbar, beta_m):
+    """(force [N], moment about the CG [N m]) in body axes, each shape (3,) (module doc).
 
-    alpha: incidence in the plane [rad]; alpha_total: total incidence [rad]; delta: fin
-    deflection of the plane [rad]; beta_m: √(M²−1); a: coefficient array (aero_coefficients).
+    af: ``flexnet_fe.flight.airframe.Airframe``; scale: :class:`CoefficientScale`;
+    v_b: velocity in body axes [m/s] (3,); omega: body rates (p, q, r) [rad/s] (3,);
+    fin_delta: deflections of rudder_1..4 [rad] (4,); qbar: dynamic pressure [Pa]; beta_m: √(M²−1).
+    Written out in scalars (one allocation per call): acc[k] holds (F, M) of part k = 0 incidence,
+    1 rate, 2 control.
     """
-    cn_alpha = a[CN_NOSE] + a[CN_BODY] * alpha_total + (a[CN_WING] + a[CN_TAIL]) / beta_m
-    cm_alpha = (a[CN_NOSE] * a[ARM_NOSE] + a[CN_BODY] * a[ARM_BODY] * alpha_total
-                + (a[CN_WING] * a[ARM_WING] + a[CN_TAIL] * a[ARM_TAIL]) / beta_m)
-    cn_delta = a[CN_TAIL] / beta_m
-    cm_delta = a[CN_TAIL] * a[ARM_TAIL] / beta_m
-    cn = k_lift * cn_alpha * alpha + k_ctrl * cn_delta * delta
-    cm = k_moment * cm_alpha * alpha + k_ctrl * cm_delta * delta
-    return cn, cm
-
-
-@njit(cache=True)
-def roll_moment(qbar, speed, p, delta_roll, beta_m, a, k_lift, k_ctrl):
-    """Roll moment M_x [N m] from mean fin deflection ``delta_roll`` [rad] and roll rate ``p``
-    [rad/s] (strip theory with the 4/β_M panel slope, module doc)."""
-    control = qbar * a[SREF] * a[DREF] * k_ctrl * a[CL_DELTA] / beta_m * delta_roll
-    damping = -qbar * (p / speed) / beta_m * (k_lift * a[ROLL_DAMP_WING] + k_ctrl * a[ROLL_DAMP_TAIL])
-    return control + damping
+    speed = math.sqrt(v_b[0] * v_b[0] + v_b[1] * v_b[1] + v_b[2] * v_b[2])
+    qs = qbar * af.sref
+    acc = np.zeros((3, 6))
+    # body: nose (slender body) and cross-flow, along −v_⊥ = −(0, v_y, v_z), at stations on the axis
+    vp = math.sqrt(v_b[1] * v_b[1] + v_b[2] * v_b[2])
+    for slope, station in ((af.nose_slope * speed, af.s_nose), (af.crossflow * vp, af.s_crossflow)):
+        k = -qs * slope / (speed * speed)
+        arm = af.s_cg - station                       # x of the station relative to the CG
+        acc[0, 1] += k * v_b[1]
+        acc[0, 2] += k * v_b[2]
+        acc[0, 4] -= arm * k * v_b[2]                 # (arm, 0, 0) × (0, F_y, F_z) = (0, −arm F_z, arm F_y)
+        acc[0, 5] += arm * k * v_b[1]
+    q, r = omega[1], omega[2]
+    for i in range(af.panel_slope.shape[0]):
+        n0, n1, n2 = af.panel_normal[i, 0], af.panel_normal[i, 1], af.panel_normal[i, 2]
+        c0, c1, c2 = af.panel_cp[i, 0], af.panel_cp[i, 1], af.panel_cp[i, 2]
+        x_alpha = (v_b[0] * n0 + v_b[1] * n1 + v_b[2] * n2) / speed
+        x_rate = ((q * c2 - r * c1) * n0 + r * c0 * n1 - q * c0 * n2) / speed     # ((0,q,r) × c)·n / V
+        x_ctrl = fin_delta[i - 4] if af.is_control[i] > 0.0 else 0.0
+        k_pan = -qs * af.panel_slope[i] / beta_m
+        k_car = -qs * af.carry_slope[i] / beta_m
+        k_f = k_pan + k_car
+        # moments: panel force at c: c × n; carry-over at (c0, 0, 0): (0, −c0 n2, c0 n1)
+        m0 = k_pan * (c1 * n2 - c2 * n1)
+        m1 = k_pan * (c2 * n0 - c0 * n2) - k_car * c0 * n2
+        m2 = k_pan * (c0 * n1 - c1 * n0) + k_car * c0 * n1
+        for part, x in ((0, x_alpha), (1, x_rate), (2, x_ctrl)):
+            acc[part, 0] += k_f * x * n0
+            acc[part, 1] += k_f * x * n1
+            acc[part, 2] += k_f * x * n2
+            acc[part, 3] += m0 * x
+            acc[part, 4] += m1 * x
+            acc[part, 5] += m2 * x
+        acc[1, 3] -= qs * af.dref * (omega[0] * af.dref / speed) * af.panel_roll_damp[i] / beta_m
+    force, moment = np.empty(3), np.empty(3)
+    for k in range(3):
+        force[k] = scale.lift * acc[0, k] + scale.control * acc[2, k] + acc[1, k]
+        moment[k] = scale.moment * acc[0, 3 + k] + scale.control * acc[2, 3 + k] + acc[1, 3 + k]
+    return force, moment

@@ -1,9 +1,10 @@
-"""The ``[flight]`` table: engagement, airframe, autopilot, actuator, seeker, damage, sweep.
+"""The ``[flight]`` table: engagement, autopilot, actuator, seeker, damage, damage law, sweep.
 
-Defaults: the engagement of paper §VI; the airframe of Zarchan (*Tactical and Strategic Missile
-Guidance*, 6th ed., AIAA 2012, ch. 21–23: 1000 lb, 20 ft × 1 ft tail-controlled missile,
-converted to SI); the three-loop autopilot and actuator values of Zarchan's ch. 23 example.
-Angles that people type are given in degrees through fields named ``*_deg``.
+Defaults: the engagement of paper §VI; the three-loop autopilot and actuator values of Zarchan's
+example (*Tactical and Strategic Missile Guidance*, 6th ed., AIAA 2012, ch. 23). The airframe is
+the case's ``[missile]`` (``flexnet_fe.flight.airframe`` builds its aerodynamics from the
+geometry); there is no second airframe description here. Angles that people type are given in
+degrees through fields named ``*_deg``.
 """
 
 from __future__ import annotations
@@ -13,12 +14,6 @@ from enum import Enum
 from pydantic import Field, model_validator
 
 from flexnet_fe.schema import Fraction, NonNegative, Positive, Section, Vec3
-
-FT = 0.3048
-"""One foot [m] (Zarchan's airframe is specified in feet)."""
-LB = 0.45359237
-"""One pound mass [kg]."""
-
 
 class VerticalAxis(str, Enum):
     """Which axis of the paper's engagement coordinates points up (the paper does not say)."""
@@ -43,16 +38,36 @@ class LaunchDirection(str, Enum):
     """lead angle that would hit the aircraft if it kept flying straight at constant speed"""
 
 
-class StabilityDamage(str, Enum):
-    """Two readings of the paper's "40 % increase of the pitch/yaw stability moment coefficient".
+class DamageModel(str, Enum):
+    """How wing and rudder damage change the aerodynamics.
 
-    The static-stability derivatives m_z^α, m_y^β are negative for a stable missile.
+    ``geometry``: each damaged panel loses that share of its lift, carry-over and roll damping in
+    the component build-up (``flexnet_fe.flight.airframe``): centre of pressure, static margin,
+    control power and damping move as the component moments say. The other two are the paper's
+    §VI coefficient scalings of whole-airframe derivatives (lift/side-force slopes × (1 − d),
+    control derivatives × e), with two readings of its "40 % increase of the pitch/yaw stability
+    moment coefficient" (m^α < 0 for a stable missile):
     """
 
+    geometry = "geometry"
     magnitude = "magnitude"
     """m^α → (1 + d)·m^α: the moment grows in magnitude (more stable)"""
     toward_instability = "toward_instability"
     """m^α → m^α + d·|m^α| = (1 − d)·m^α: algebraic increase, towards neutral stability"""
+
+
+class DamageLaw(str, Enum):
+    """Fin stress (shell stage envelope) → share of a fin's aerodynamic area that is lost.
+
+    ``overstressed_area``: a cell whose peak von Mises exceeds ``threshold_factor`` × the fin
+    allowable counts as lost (the stress exceeded means the panel no longer holds its shape).
+    ``failure_strain``: the linear-elastic peak stress σ_e is turned into an elastic–plastic strain
+    by Neuber's rule for an elastic–perfectly-plastic material, ε = σ_e²/(E σ_y) above yield
+    (σ_e/E below); a cell whose strain exceeds ``failure_strain`` breaks off (area lost).
+    """
+
+    overstressed_area = "overstressed_area"
+    failure_strain = "failure_strain"
 
 
 class SweepParameter(str, Enum):
@@ -60,38 +75,6 @@ class SweepParameter(str, Enum):
 
     wing_damage = "wing_damage"
     rudder_effectiveness = "rudder_effectiveness"
-
-
-class AirframeConfig(Section):
-    """Zarchan's missile (ch. 21, Listing 21.2 / 23.1), SI units. Slender-body nose and body,
-    linear supersonic (Ackeret 4/β) wing and tail panels; each panel is a triangle (tip chord 0)."""
-
-    mass: Positive = Field(1000.0 * LB, description="missile mass [kg] (Zarchan: 1000 lb)")
-    length: Positive = Field(20.0 * FT, description="missile length [m]")
-    diameter: Positive = Field(1.0 * FT, description="body diameter = reference length [m]")
-    nose_length: Positive = Field(3.0 * FT, description="nose (radome) length [m]")
-    x_cg: Positive = Field(10.0 * FT, description="centre of gravity, distance aft of the nose tip [m]")
-    x_hinge: Positive = Field(19.5 * FT, description="tail hinge line (tail centre of pressure) aft of the nose tip [m]")
-    wing_root_le: Positive = Field(7.0 * FT, description="wing root leading edge aft of the nose tip [m]")
-    wing_root_chord: Positive = Field(6.0 * FT, description="wing root chord [m]")
-    wing_span: Positive = Field(2.0 * FT, description="span (height) of one wing panel [m]")
-    tail_root_chord: Positive = Field(2.0 * FT, description="tail root chord [m]")
-    tail_span: Positive = Field(2.0 * FT, description="span (height) of one tail panel [m]")
-    axial_force_coefficient: NonNegative = Field(
-        0.0, description="axial force coefficient C_A [-] (0: thrust balances drag, Zarchan's constant-speed airframe)")
-    roll_inertia: Positive | None = Field(
-        None, description="I_xx [kg m^2]; default: solid cylinder m d^2/8 (Zarchan gives only I_yy)")
-    pitch_inertia: Positive | None = Field(
-        None, description="I_yy = I_zz [kg m^2]; default: Zarchan's m (3 r^2 + L^2)/12")
-
-    @model_validator(mode="after")
-    def _stations_inside(self) -> "AirframeConfig":
-        for name in ("x_cg", "x_hinge", "wing_root_le", "nose_length"):
-            if getattr(self, name) >= self.length:
-                raise ValueError(f"{name} must lie inside the missile length {self.length} m")
-        if self.wing_root_le + self.wing_root_chord > self.length:
-            raise ValueError("wing extends beyond the missile tail")
-        return self
 
 
 class AutopilotConfig(Section):
@@ -124,12 +107,32 @@ class SeekerConfig(Section):
 
 
 class DamageConfig(Section):
-    """Damage as multipliers on aerodynamic derivatives (paper §VI)."""
+    """Aerodynamic damage of the wings and rudders (paper §VI), see :class:`DamageModel`."""
 
-    wing_damage: Fraction = Field(0.0, description="d: lift/side-force slopes × (1 − d), stability moments per `stability` [-]")
-    stability: StabilityDamage = Field(StabilityDamage.toward_instability,
-                                       description="reading of the paper's '40 % increase of the stability moment'")
-    rudder_effectiveness: Fraction = Field(1.0, description="e: control force and moment derivatives × e (0 = rudders lost) [-]")
+    model: DamageModel = Field(DamageModel.geometry, description="geometry | magnitude | toward_instability")
+    wing_damage: Fraction = Field(0.0, description="d: share of every wing's lift lost (geometry), or the paper's "
+                                                   "lift × (1 − d) with the stability moment per `model` [-]")
+    rudder_effectiveness: Fraction = Field(1.0, description="e: share of every rudder kept (geometry: its lift, "
+                                                            "control power and damping), or control derivatives × e [-]")
+
+    @model_validator(mode="before")
+    @classmethod
+    def _renamed(cls, data):
+        if isinstance(data, dict) and "stability" in data:
+            raise ValueError("'stability' was renamed 'model' (geometry | magnitude | toward_instability)")
+        return data
+
+
+class DamageLawConfig(Section):
+    """The link fin stress → lost aerodynamic area (:class:`DamageLaw`), used with
+    ``damage_from_shell``. The allowable stress σ_y is the fin material's (``[missile.material]``),
+    read from the shell stage's summary (``allowable_pa``)."""
+
+    law: DamageLaw = Field(DamageLaw.failure_strain, description="overstressed_area | failure_strain")
+    threshold_factor: Positive = Field(1.0, description="overstressed_area: lost where σ_vm,peak > factor × σ_allow [-]")
+    failure_strain: Positive = Field(
+        0.11, description="failure_strain: strain at break [-] (Al 7075-T6: elongation at break 11 %, "
+                          "ASM Aerospace Specification Metals / MatWeb)")
 
 
 class SweepConfig(Section):
@@ -159,22 +162,29 @@ class FlightConfig(Section):
     t_end: Positive = Field(30.0, description="end time if no closest approach happens first [s]")
     output_dt: Positive = Field(1e-3, description="history.csv output interval [s]")
     damage_from_shell: bool = Field(
-        False, description="derive wing_damage and rudder_effectiveness from the shell stage's peak stresses "
-                           "(flexnet_fe.flight.damage); the stability reading stays [flight.damage].stability")
-    damage_allowable_stress: Positive | None = Field(
-        None, description="peak von Mises stress above which fin area counts as lost [Pa] "
-                          "(needed with damage_from_shell; e.g. the fin material's yield strength)")
-    airframe: AirframeConfig = AirframeConfig()
+        False, description="derive each fin's remaining share from the shell stage's peak stresses with "
+                           "[flight.damage_law] (flexnet_fe.flight.damage); the model stays [flight.damage].model")
     autopilot: AutopilotConfig = AutopilotConfig()
     actuator: ActuatorConfig = ActuatorConfig()
     seeker: SeekerConfig = SeekerConfig()
     damage: DamageConfig = DamageConfig()
+    damage_law: DamageLawConfig = DamageLawConfig()
     sweep: SweepConfig | None = None
+
+    @model_validator(mode="before")
+    @classmethod
+    def _removed(cls, data):
+        if isinstance(data, dict):
+            if "damage_allowable_stress" in data:
+                raise ValueError("damage_allowable_stress is gone: the fin allowable is the fin material's "
+                                 "([missile.material] yield_strength), passed on by the shell stage's summary")
+            if "airframe" in data:
+                raise ValueError("[flight.airframe] is gone: the airframe is the case's [missile] table "
+                                 "(aerodynamics by component build-up, flexnet_fe.flight.airframe)")
+        return data
 
     @model_validator(mode="after")
     def _checks(self) -> "FlightConfig":
-        if self.damage_from_shell and self.damage_allowable_stress is None:
-            raise ValueError("damage_from_shell = true needs damage_allowable_stress [Pa]")
         if self.output_dt < self.dt:
             raise ValueError("output_dt must be >= dt")
         if sum(c * c for c in self.target_direction) == 0.0:

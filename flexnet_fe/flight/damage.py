@@ -1,16 +1,25 @@
-"""Optional link shell → flight: damage fractions from the fins' peak stresses.
+"""Link shell → flight: the damage law, fin stress → share of each fin's aerodynamic area lost.
 
 The shell stage writes, per fin, ``<shell_dir>/<fin>/envelope.xdmf`` (+ ``.h5``): the peak-over-
-time von Mises stress of every cell (scalar DG0 field ``peak_von_mises_pa``). Here a cell whose
-peak exceeds an allowable stress counts as lost aerodynamic area:
+time von Mises stress of every cell (scalar DG0 field ``peak_von_mises_pa``), and in the run's
+``summary.json`` (section ``shell``, per fin) the fin allowable ``allowable_pa`` — the fin
+material's yield strength σ_y (``[missile.material]``, its one home). A cell is lost by the law of
+``[flight.damage_law]`` (``flexnet_fe.flight.config.DamageLaw``):
 
-    f_fin = Σ_{cells: σ_vm,peak > σ_allow} A_cell / Σ_cells A_cell
+    overstressed_area:  σ_vm,peak > k σ_y
+    failure_strain:     ε(σ_vm,peak) > ε_f,  ε(σ) = σ/E (σ ≤ σ_y),  σ²/(E σ_y) (σ > σ_y)
 
-    wing_damage          = mean of f over the missile's wings   (a wing the shell stage did not
-    rudder_effectiveness = 1 − mean of f over its rudders        solve counts as undamaged)
+The second is Neuber's rule (H. Neuber, J. Appl. Mech. 28, 1961: σ ε = σ_e²/E at a notch) for an
+elastic–perfectly-plastic material: the linear-elastic shell peak σ_e stands for the strain
+energy density the real, yielding fin must absorb. Assumptions, stated: (1) the shell solution is
+linear elastic, so σ_e is the elastic peak, not the real stress; (2) a cell past ε_f breaks off
+and its area stops lifting; a cell that yields without breaking keeps its lift (its permanent set
+is not modelled); (3) a fin's lift, carry-over and roll damping scale with its remaining area
+(``flexnet_fe.flight.airframe.damaged``), its centre of pressure stays.
 
-Modelling assumption (not from the paper, which sets the damage by hand): the force and moment
-derivatives a fin set contributes scale with its remaining (not overstressed) area.
+    f_fin = Σ_{lost cells} A_cell / Σ_cells A_cell,   remaining_fin = 1 − f_fin
+
+A fin the shell stage did not solve counts as undamaged.
 """
 
 from __future__ import annotations
@@ -23,6 +32,8 @@ import h5py
 import numpy as np
 
 from flexnet_fe.errors import FlexnetError
+from flexnet_fe.flight.config import DamageLaw, DamageLawConfig
+from flexnet_fe.io import read_json
 
 FIELD = "peak_von_mises_pa"
 WING_PREFIX = "wing_"
@@ -70,36 +81,72 @@ def read_cell_field(xdmf: Path, name: str = FIELD) -> tuple[np.ndarray, np.ndarr
     return cell_areas(points, cells), values
 
 
-def overstressed_fraction(areas: np.ndarray, peak: np.ndarray, allowable: float) -> float:
-    """Share of the area [-] whose peak stress [Pa] exceeds ``allowable`` [Pa]."""
-    return float(areas[peak > allowable].sum() / areas.sum())
+def neuber_strain(stress: np.ndarray, youngs_modulus: float, yield_strength: float) -> np.ndarray:
+    """Elastic–perfectly-plastic strain [-] of a linear-elastic stress σ_e [Pa] by Neuber's rule:
+    σ_e/E below yield, σ_e²/(E σ_y) above (continuous at σ_y)."""
+    s = np.asarray(stress, dtype=float)
+    return np.where(s <= yield_strength, s / youngs_modulus, s * s / (youngs_modulus * yield_strength))
+
+
+def lost_cells(peak: np.ndarray, law: DamageLawConfig, allowable: float, youngs_modulus: float) -> np.ndarray:
+    """Boolean mask of the cells the damage law removes (peak von Mises [Pa], shape (n,))."""
+    if law.law is DamageLaw.overstressed_area:
+        return peak > law.threshold_factor * allowable
+    if law.law is DamageLaw.failure_strain:
+        return neuber_strain(peak, youngs_modulus, allowable) > law.failure_strain
+    raise ValueError(f"unknown damage law {law.law!r}")
 
 
 @dataclass(frozen=True)
-class ShellDamage:
-    """Damage fractions derived from the shell stage."""
+class FinDamage:
+    """Remaining share of each fin's lift [-], shape (8,), order wing_1..4, rudder_1..4."""
 
-    per_fin: dict[str, float]
-    """overstressed area share of each fin the shell stage solved [-]"""
-    wing_damage: float
-    rudder_effectiveness: float
+    remaining: np.ndarray
+    NAMES = tuple(f"wing_{i}" for i in range(1, 5)) + tuple(f"rudder_{i}" for i in range(1, 5))
+
+    @classmethod
+    def uniform(cls, wing_damage: float, rudder_effectiveness: float) -> "FinDamage":
+        return cls(np.array([1.0 - wing_damage] * 4 + [rudder_effectiveness] * 4))
+
+    @property
+    def wing_damage(self) -> float:
+        """mean share of wing lift lost [-]"""
+        return float(1.0 - self.remaining[:4].mean())
+
+    @property
+    def rudder_effectiveness(self) -> float:
+        """mean share of rudder kept [-]"""
+        return float(self.remaining[4:].mean())
 
 
-def damage_from_shell(shell_dir: Path, allowable: float, n_wings: int = 4, n_rudders: int = 4) -> ShellDamage:
-    """Damage of the flight stage from ``<shell_dir>/<fin>/envelope.xdmf`` (fins named
-    ``wing_i`` / ``rudder_i`` as in ``flexnet_fe.missile``; cruciform sets of 4 by default)."""
+def shell_allowables(shell_dir: Path) -> dict[str, float]:
+    """Per fin ``allowable_pa`` from the run's summary.json (section ``shell``), where present."""
+    path = Path(shell_dir).parent / "summary.json"
+    if not path.is_file():
+        return {}
+    shell = read_json(path).get("shell", {})
+    return {k: float(v["allowable_pa"]) for k, v in shell.items() if isinstance(v, dict) and "allowable_pa" in v}
+
+
+def damage_from_shell(shell_dir: Path, law: DamageLawConfig, material) -> tuple[FinDamage, dict]:
+    """(FinDamage, summary of the link) from ``<shell_dir>/<fin>/envelope.xdmf``. The allowable is
+    the shell summary's ``allowable_pa`` of the fin, or — for a shell stage that does not write it
+    — the fin material's yield strength (``material``: ``flexnet_fe.missile.config.FinMaterial``,
+    also the source of E)."""
     shell_dir = Path(shell_dir)
-    per_fin = {}
+    allow = shell_allowables(shell_dir)
+    lost, used = {}, {}
     for env in sorted(shell_dir.glob("*/envelope.xdmf")):
         name = env.parent.name
-        if not name.startswith((WING_PREFIX, RUDDER_PREFIX)):
-            raise FlexnetError(f"{env}: fin '{name}' is neither a wing_ nor a rudder_")
-        per_fin[name] = overstressed_fraction(*read_cell_field(env), allowable)
-    if not per_fin:
+        if name not in FinDamage.NAMES:
+            raise FlexnetError(f"{env}: fin '{name}' is not one of {', '.join(FinDamage.NAMES)}")
+        used[name] = allow.get(name, material.yield_strength)
+        areas, peak = read_cell_field(env)
+        lost[name] = float(areas[lost_cells(peak, law, used[name], material.youngs_modulus)].sum() / areas.sum())
+    if not lost:
         raise FlexnetError(f"{shell_dir}: no <fin>/envelope.xdmf from the shell stage")
-    wings = [f for n, f in per_fin.items() if n.startswith(WING_PREFIX)]
-    rudders = [f for n, f in per_fin.items() if n.startswith(RUDDER_PREFIX)]
-    if len(wings) > n_wings or len(rudders) > n_rudders:
-        raise FlexnetError(f"{shell_dir}: more fins ({len(wings)} wings, {len(rudders)} rudders) than "
-                           f"the missile has ({n_wings}, {n_rudders})")
-    return ShellDamage(per_fin, sum(wings) / n_wings, 1.0 - sum(rudders) / n_rudders)
+    rem = np.array([1.0 - lost.get(n, 0.0) for n in FinDamage.NAMES])
+    link = {"law": law.law.value, "threshold_factor": law.threshold_factor, "failure_strain": law.failure_strain,
+            "allowable_pa": used, "allowable_from": "shell summary" if allow else "fin material (shell summary has none)",
+            "lost_area_fraction": lost, "remaining": dict(zip(FinDamage.NAMES, map(float, rem)))}
+    return FinDamage(rem), link

@@ -1,73 +1,50 @@
 """The engagement: missile 6-DOF + fin actuators + autopilot + seeker + PN vs a turning aircraft.
 
-One numba kernel advances the whole state with fixed-step classical RK4 (all blocks are
-continuous-time, as in Zarchan's simulations) until the first closest approach (range rate
-changes sign) or ``t_end``. The aircraft is evaluated in closed form. Frames: ``flexnet_fe.flight``.
+Model and state are data (``FlightModel``, a NamedTuple of NamedTuples numba reads; the state a
+flat vector with the named offsets below); the right-hand side :func:`derivative` is pure and is
+the composition of separate blocks — target, seeker/guidance, air data, aerodynamics
+(``flexnet_fe.flight.aero.loads``), autopilot, actuators, rigid body. Diagnostics are a separate
+pure function (:func:`diagnostics`) whose values are named by :data:`DIAG_COLUMNS`. One numba
+kernel (:func:`advance`) integrates with classical RK4 (all blocks are continuous-time, as in
+Zarchan's simulations) until the first closest approach (range rate changes sign) or ``n_steps``.
+Frames: ``flexnet_fe.flight``.
 
 State vector s, shape (N_STATE,):
-    0:3   missile position in F [m]          3:6   missile velocity in F [m/s]
-    6:10  attitude quaternion B→F (w,x,y,z)   10:13 body rates p, q, r [rad/s]
-    13:17 fin deflections δ_0..δ_3 [rad]      17:21 fin rates [rad/s]
-    21:23 three-loop integrator states x (pitch, yaw) [rad]
-    23:26 seeker-filtered LOS rate Ω_f in F [rad/s]
+    POS 0:3 missile position in F [m]           VEL 3:6 velocity in F [m/s]
+    QUAT 6:10 attitude quaternion B→F (w,x,y,z)  RATE 10:13 body rates p, q, r [rad/s]
+    FIN 13:17 deflections of rudder_1..4 [rad]   FIN_RATE 17:21 their rates [rad/s]
+    INTEG 21:23 three-loop integrators (pitch, yaw) [rad]   LOS 23:26 seeker LOS rate Ω_f in F [rad/s]
 
 Fin actuators: δ̈ = ω_a² (sat(δ_c) − δ) − 2 ζ_a ω_a δ̇ with the rate held at ±rate limit and the
 deflection at ±position limit (mechanical stops: after each step the states are put back on the
-stop; the history shows them against the limits). These are the physical limits of the actuator,
-not numerical clamps.
+stop). These are the physical limits of the actuator, not numerical clamps.
 """
 
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
 
-from flexnet_fe.flight import aero as A
+from flexnet_fe.flight.aero import CoefficientScale, loads, supersonic_beta
+from flexnet_fe.flight.airframe import Airframe
 from flexnet_fe.flight.eom import euler_rates, quat_rate
 from flexnet_fe.flight.guidance import closing_speed, first_order_lag_rate, los_rate, pn_command
 from flexnet_fe.flight.target import level_turn
 from flexnet_fe.rigid import quat_to_matrix
 
+POS, VEL, QUAT, RATE, FIN, FIN_RATE, INTEG, LOS = 0, 3, 6, 10, 13, 17, 21, 23
 N_STATE = 26
 
-# Parameter vector P (float64), built by flexnet_fe.flight.stage.build_parameters.
-P_NAV = 0          # navigation constant N [-]
-P_TAU_S = 1        # seeker time constant [s]
-P_AMAX = 2         # acceleration command limit [m/s^2]
-P_GCOMP = 3        # 1: add +g to the command
-P_G = 4            # gravity [m/s^2]
-P_MASS = 5         # [kg]
-P_IXX = 6          # [kg m^2]
-P_IYY = 7          # [kg m^2] (= I_zz)
-P_KLIFT = 8        # damage multiplier on C_N alpha-terms
-P_KMOM = 9         # damage multiplier on C_M alpha-terms
-P_KCTRL = 10       # rudder effectiveness
-P_KA = 11          # three-loop gains
-P_WI = 12
-P_KR = 13
-P_KDC = 14
-P_KPHI = 15        # roll gains
-P_KP = 16
-P_WACT = 17        # actuator [rad/s]
-P_ZACT = 18
-P_DMAX = 19        # [rad]
-P_RMAX = 20        # [rad/s]
-P_TSPEED = 21      # target speed [m/s]
-P_TOMEGA = 22      # target turn rate [rad/s]
-P_TSTART = 23      # turn start [s]
-P_ALT0 = 24        # altitude of y_F = 0 [m]
-P_MACH_MIN = 25    # lowest Mach of the aero model
-N_PARAM = 26
-
-# Diagnostics recorded with the history (index, column name with unit).
 DIAG_COLUMNS = (
     "target_x_m", "target_y_m", "target_z_m",
     "accel_cmd_y_mps2", "accel_cmd_z_mps2", "accel_y_mps2", "accel_z_mps2",
     "alpha_rad", "alpha_yaw_rad", "mach", "range_m", "closing_speed_mps",
     "fin_cmd_pitch_rad", "fin_cmd_yaw_rad", "fin_cmd_roll_rad", "roll_angle_rad",
 )
+"""Names (with units) of the values :func:`diagnostics` returns, in its order."""
 N_DIAG = len(DIAG_COLUMNS)
 
 STATUS_CLOSEST = 0
@@ -77,224 +54,293 @@ STATUS_SUBSONIC = 3
 STATUS_OUT_OF_AIR_TABLE = 4
 
 
+class Guidance(NamedTuple):
+    nav: float
+    """navigation constant N [-]"""
+    tau_s: float
+    """seeker time constant [s]"""
+    a_max: float
+    """acceleration command limit [m/s²]"""
+    gravity_comp: bool
+    """add +g (up) to the command"""
+    gravity: float
+    """[m/s²]"""
+
+
+class Gains(NamedTuple):
+    """Fixed autopilot gains (three-loop pitch/yaw, PD roll), see flexnet_fe.flight.autopilot."""
+
+    k_a: float
+    omega_i: float
+    k_r: float
+    k_dc: float
+    k_phi: float
+    k_p: float
+
+
+class Actuator(NamedTuple):
+    omega: float
+    """[rad/s]"""
+    zeta: float
+    max_deflection: float
+    """[rad]"""
+    max_rate: float
+    """[rad/s]"""
+
+
+class Target(NamedTuple):
+    """Level-turning aircraft (flexnet_fe.flight.target), vectors in F, shape (3,)."""
+
+    p0: np.ndarray
+    forward: np.ndarray
+    centre: np.ndarray
+    speed: float
+    omega: float
+    t_start: float
+
+
+class AirTable(NamedTuple):
+    """ISA density [kg/m³] and speed of sound [m/s] at altitudes alt0 + k dalt [m]."""
+
+    alt0: float
+    dalt: float
+    rho: np.ndarray
+    sound: np.ndarray
+
+
+class FlightModel(NamedTuple):
+    airframe: Airframe
+    scale: CoefficientScale
+    guidance: Guidance
+    gains: Gains
+    actuator: Actuator
+    target: Target
+    air: AirTable
+    alt0: float
+    """altitude of y_F = 0 [m]"""
+
+
 @njit(cache=True)
 def _mat_vec(m, v):
     """m @ v for (3, 3) and (3,) without BLAS call overhead."""
-    out = np.empty(3)
-    for i in range(3):
-        out[i] = m[i, 0] * v[0] + m[i, 1] * v[1] + m[i, 2] * v[2]
-    return out
+    return np.array([m[0, 0] * v[0] + m[0, 1] * v[1] + m[0, 2] * v[2],
+                     m[1, 0] * v[0] + m[1, 1] * v[1] + m[1, 2] * v[2],
+                     m[2, 0] * v[0] + m[2, 1] * v[1] + m[2, 2] * v[2]])
 
 
 @njit(cache=True)
 def _mat_t_vec(m, v):
     """m.T @ v for (3, 3) and (3,)."""
-    out = np.empty(3)
-    for i in range(3):
-        out[i] = m[0, i] * v[0] + m[1, i] * v[1] + m[2, i] * v[2]
+    return np.array([m[0, 0] * v[0] + m[1, 0] * v[1] + m[2, 0] * v[2],
+                     m[0, 1] * v[0] + m[1, 1] * v[1] + m[2, 1] * v[2],
+                     m[0, 2] * v[0] + m[1, 2] * v[1] + m[2, 2] * v[2]])
+
+
+@njit(cache=True)
+def air_at(alt, air):
+    """(ρ [kg/m³], a [m/s]) at altitude ``alt`` [m] by linear interpolation in the table (the
+    kernel stops the run when the missile leaves it)."""
+    n = air.rho.shape[0]
+    x = (alt - air.alt0) / air.dalt
+    i = min(max(int(math.floor(x)), 0), n - 2)
+    f = x - i
+    return air.rho[i] * (1 - f) + air.rho[i + 1] * f, air.sound[i] * (1 - f) + air.sound[i + 1] * f
+
+
+@njit(cache=True)
+def target_state(t, tg):
+    """Aircraft position [m], velocity [m/s] in F at time t [s]."""
+    p, v, _a = level_turn(t, tg.p0, tg.forward, tg.centre, tg.speed, tg.omega, tg.t_start)
+    return p, v
+
+
+@njit(cache=True)
+def guidance_command(s, rot, pt, vt, gd):
+    """(body normal command (y_b, z_b) [m/s²] limited to a_max, seeker rate dΩ_f/dt (3,), V_c [m/s]):
+    true PN on the seeker-filtered LOS rate, + g up if compensated, rotated into body axes."""
+    r = pt - s[POS:POS + 3]
+    v = vt - s[VEL:VEL + 3]
+    d_los = first_order_lag_rate(s[LOS:LOS + 3], los_rate(r, v), gd.tau_s)
+    vc = closing_speed(r, v)
+    a_cmd = pn_command(gd.nav, vc, s[LOS:LOS + 3], r)
+    if gd.gravity_comp:
+        a_cmd[1] += gd.gravity
+    f_cmd = _mat_t_vec(rot, a_cmd)
+    cy, cz = f_cmd[1], f_cmd[2]
+    cmag = math.sqrt(cy * cy + cz * cz)
+    if cmag > gd.a_max:
+        cy *= gd.a_max / cmag
+        cz *= gd.a_max / cmag
+    return cy, cz, d_los, vc
+
+
+@njit(cache=True)
+def roll_angle(rot):
+    """Roll φ [rad] of R = R_y(ψ) R_z(θ) R_x(φ) (flexnet_fe.flight)."""
+    return math.atan2(-rot[1, 2], rot[1, 1])
+
+
+@njit(cache=True)
+def autopilot(accel_b, cmd_y, cmd_z, omega, integ, phi, g):
+    """Three-loop pitch (rate ω_z) and yaw (rate −ω_y) and PD roll hold (Zarchan ch. 23).
+
+    accel_b: aerodynamic specific force in body axes [m/s²] (3,) (accelerometer at the CG);
+    cmd_y, cmd_z: commands [m/s²]; omega: body rates (3,); integ: integrators (2,); phi: roll [rad].
+    Returns (d integ/dt (2,), fin commands of rudder_1..4 (4,), (pitch, yaw, roll) commands [rad])."""
+    rate_p, rate_y = omega[2], -omega[1]
+    d_integ = np.array([g.omega_i * (rate_p + g.k_a * (accel_b[1] - g.k_dc * cmd_y)),
+                        g.omega_i * (rate_y + g.k_a * (accel_b[2] - g.k_dc * cmd_z))])
+    dc_p = g.k_r * (integ[0] + rate_p)
+    dc_y = g.k_r * (integ[1] + rate_y)
+    dc_r = -(g.k_phi * phi + g.k_p * omega[0])
+    # mixing (fins 0 top, 1 right, 2 bottom, 3 left; frame doc in flexnet_fe.flight)
+    cmd = np.array([-dc_y + dc_r, dc_p + dc_r, dc_y + dc_r, -dc_p + dc_r])
+    return d_integ, cmd, (dc_p, dc_y, dc_r)
+
+
+@njit(cache=True)
+def actuator_rates(delta, rate, cmd, act):
+    """(dδ/dt, dδ̇/dt), each (4,): 2nd-order actuators against their rate and position stops."""
+    d_delta, d_rate = np.empty(4), np.empty(4)
+    for i in range(4):
+        c = min(max(cmd[i], -act.max_deflection), act.max_deflection)
+        acc = act.omega * act.omega * (c - delta[i]) - 2.0 * act.zeta * act.omega * rate[i]
+        if (rate[i] >= act.max_rate and acc > 0) or (rate[i] <= -act.max_rate and acc < 0):
+            acc = 0.0
+        pos_rate = rate[i]
+        if (delta[i] >= act.max_deflection and pos_rate > 0) or (delta[i] <= -act.max_deflection and pos_rate < 0):
+            pos_rate = 0.0
+        d_delta[i] = pos_rate
+        d_rate[i] = acc
+    return d_delta, d_rate
+
+
+@njit(cache=True)
+def air_data(s, rot, m):
+    """(body velocity (3,) [m/s], q̄ [Pa], Mach, β_M) at the missile (β_M from max(M, M_min))."""
+    rho, a_sound = air_at(m.alt0 + s[POS + 1], m.air)
+    v_b = _mat_t_vec(rot, s[VEL:VEL + 3])
+    speed = math.sqrt(v_b[0] * v_b[0] + v_b[1] * v_b[1] + v_b[2] * v_b[2])
+    mach = speed / a_sound
+    return v_b, 0.5 * rho * speed * speed, mach, supersonic_beta(max(mach, m.airframe.mach_min))
+
+
+@njit(cache=True)
+def derivative(t, s, m):
+    """ṡ (N_STATE,) at time t [s] for model m (``FlightModel``); pure."""
+    af = m.airframe
+    q = s[QUAT:QUAT + 4] / math.sqrt(np.dot(s[QUAT:QUAT + 4], s[QUAT:QUAT + 4]))
+    rot = quat_to_matrix(q)
+    pt, vt = target_state(t, m.target)
+    cy, cz, d_los, _vc = guidance_command(s, rot, pt, vt, m.guidance)
+    v_b, qbar, _mach, beta_m = air_data(s, rot, m)
+    omega = s[RATE:RATE + 3]
+    force, moment = loads(af, m.scale, v_b, omega, s[FIN:FIN + 4], qbar, beta_m)
+    accel_b = force / af.mass
+    d_integ, cmd, _dc = autopilot(accel_b, cy, cz, omega, s[INTEG:INTEG + 2], roll_angle(rot), m.gains)
+    d_delta, d_rate = actuator_rates(s[FIN:FIN + 4], s[FIN_RATE:FIN_RATE + 4], cmd, m.actuator)
+    ds = np.empty(N_STATE)
+    ds[POS:POS + 3] = s[VEL:VEL + 3]                                   # rigid body (flexnet_fe.flight.eom)
+    ds[VEL:VEL + 3] = _mat_vec(rot, accel_b)
+    ds[VEL + 1] -= m.guidance.gravity
+    ds[QUAT:QUAT + 4] = quat_rate(s[QUAT:QUAT + 4], omega)
+    ds[RATE:RATE + 3] = euler_rates(omega, af.inertia, moment)
+    ds[FIN:FIN + 4] = d_delta
+    ds[FIN_RATE:FIN_RATE + 4] = d_rate
+    ds[INTEG:INTEG + 2] = d_integ
+    ds[LOS:LOS + 3] = d_los
+    return ds
+
+
+@njit(cache=True)
+def diagnostics(t, s, m):
+    """The values named by :data:`DIAG_COLUMNS` at (t, s), shape (N_DIAG,); pure."""
+    q = s[QUAT:QUAT + 4] / math.sqrt(np.dot(s[QUAT:QUAT + 4], s[QUAT:QUAT + 4]))
+    rot = quat_to_matrix(q)
+    pt, vt = target_state(t, m.target)
+    cy, cz, _d, vc = guidance_command(s, rot, pt, vt, m.guidance)
+    v_b, qbar, mach, beta_m = air_data(s, rot, m)
+    force, _mom = loads(m.airframe, m.scale, v_b, s[RATE:RATE + 3], s[FIN:FIN + 4], qbar, beta_m)
+    accel_b = force / m.airframe.mass
+    phi = roll_angle(rot)
+    _di, _cmd, dc = autopilot(accel_b, cy, cz, s[RATE:RATE + 3], s[INTEG:INTEG + 2], phi, m.gains)
+    r = pt - s[POS:POS + 3]
+    return np.array([pt[0], pt[1], pt[2], cy, cz, accel_b[1], accel_b[2],
+                     math.atan2(-v_b[1], v_b[0]), math.atan2(-v_b[2], v_b[0]), mach,
+                     math.sqrt(np.dot(r, r)), vc, dc[0], dc[1], dc[2], phi])
+
+
+@njit(cache=True)
+def _apply_stops(s, act):
+    for i in range(4):
+        if s[FIN + i] > act.max_deflection:
+            s[FIN + i] = act.max_deflection
+            s[FIN_RATE + i] = min(s[FIN_RATE + i], 0.0)
+        elif s[FIN + i] < -act.max_deflection:
+            s[FIN + i] = -act.max_deflection
+            s[FIN_RATE + i] = max(s[FIN_RATE + i], 0.0)
+        s[FIN_RATE + i] = min(max(s[FIN_RATE + i], -act.max_rate), act.max_rate)
+
+
+@njit(cache=True)
+def range_rate_sign(t, s, m):
+    """r · ṙ of the aircraft relative to the missile [m²/s] (negative while closing)."""
+    pt, vt = target_state(t, m.target)
+    return np.dot(pt - s[POS:POS + 3], vt - s[VEL:VEL + 3])
+
+
+@njit(cache=True)
+def rk4_step(t, s, dt, m):
+    """One classical RK4 step of :func:`derivative`, then the actuator stops."""
+    k1 = derivative(t, s, m)
+    k2 = derivative(t + 0.5 * dt, s + 0.5 * dt * k1, m)
+    k3 = derivative(t + 0.5 * dt, s + 0.5 * dt * k2, m)
+    k4 = derivative(t + dt, s + dt * k3, m)
+    out = s + dt / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+    _apply_stops(out, m.actuator)
     return out
 
 
 @njit(cache=True)
-def _interp_air(alt, air):
-    """Linear interpolation in the ISA table air = (alt0, dalt, n, rho..., a...) -> (ρ, a).
-    The caller keeps ``alt`` inside the table (run_engagement stops when it leaves)."""
-    alt0, dalt, n = air[0], air[1], int(air[2])
-    x = (alt - alt0) / dalt
-    i = int(math.floor(x))
-    if i < 0:
-        i = 0
-    if i > n - 2:
-        i = n - 2
-    f = x - i
-    rho = air[3 + i] * (1 - f) + air[3 + i + 1] * f
-    a = air[3 + n + i] * (1 - f) + air[3 + n + i + 1] * f
-    return rho, a
+def _status(t, s, m):
+    if not np.all(np.isfinite(s)):
+        return STATUS_NONFINITE
+    alt = m.alt0 + s[POS + 1]
+    if alt < m.air.alt0 or alt > m.air.alt0 + m.air.dalt * (m.air.rho.shape[0] - 1):
+        return STATUS_OUT_OF_AIR_TABLE
+    if math.sqrt(np.dot(s[VEL:VEL + 3], s[VEL:VEL + 3])) < m.airframe.mach_min * air_at(alt, m.air)[1]:
+        return STATUS_SUBSONIC
+    return STATUS_T_END
 
 
 @njit(cache=True)
-def derivative(t, s, P, aero, air, tgt, ds, diag):
-    """Fill ds (shape (N_STATE,)) with ṡ at time t [s] and diag (shape (N_DIAG,)).
-
-    tgt: (p0 (3), forward (3), centre (3)) of the aircraft, shape (9,).
-    """
-    # --- target (closed form) and relative geometry
-    pt, vt, _at = level_turn(t, tgt[0:3], tgt[3:6], tgt[6:9], P[P_TSPEED], P[P_TOMEGA], P[P_TSTART])
-    q = s[6:10] / math.sqrt(np.dot(s[6:10], s[6:10]))
-    rot = quat_to_matrix(q)
-    r = pt - s[0:3]
-    v = vt - s[3:6]
-    omega_true = los_rate(r, v)
-    ds[23:26] = first_order_lag_rate(s[23:26], omega_true, P[P_TAU_S])
-    vc = closing_speed(r, v)
-    # --- guidance: PN command in F, then the body normal components (skid-to-turn)
-    a_cmd = pn_command(P[P_NAV], vc, s[23:26], r)
-    if P[P_GCOMP] > 0:
-        a_cmd[1] += P[P_G]
-    f_cmd = _mat_t_vec(rot, a_cmd)
-    cy, cz = f_cmd[1], f_cmd[2]
-    cmag = math.sqrt(cy * cy + cz * cz)
-    if cmag > P[P_AMAX]:
-        cy *= P[P_AMAX] / cmag
-        cz *= P[P_AMAX] / cmag
-    # --- air data
-    rho, a_sound = _interp_air(P[P_ALT0] + s[1], air)
-    vb = _mat_t_vec(rot, s[3:6])
-    speed = math.sqrt(np.dot(vb, vb))
-    alpha = math.atan2(-vb[1], vb[0])
-    alpha_y = math.atan2(-vb[2], vb[0])
-    alpha_t = math.sqrt(alpha * alpha + alpha_y * alpha_y)
-    mach = speed / a_sound
-    beta_m = A.supersonic_beta(max(mach, P[P_MACH_MIN]))
-    qbar = 0.5 * rho * speed * speed
-    # --- aerodynamics (fins: 0 top, 1 right, 2 bottom, 3 left; see flexnet_fe.flight)
-    d_pitch = 0.5 * (s[14] - s[16])
-    d_yaw = 0.5 * (s[15] - s[13])
-    d_roll = 0.25 * (s[13] + s[14] + s[15] + s[16])
-    cn_p, cm_p = A.plane_coefficients(alpha, alpha_t, d_pitch, beta_m, aero, P[P_KLIFT], P[P_KMOM], P[P_KCTRL])
-    cn_y, cm_y = A.plane_coefficients(alpha_y, alpha_t, d_yaw, beta_m, aero, P[P_KLIFT], P[P_KMOM], P[P_KCTRL])
-    qs = qbar * aero[A.SREF]
-    qsd = qs * aero[A.DREF]
-    f_b = np.empty(3)
-    f_b[0] = -qs * aero[A.CA] / P[P_MASS]
-    f_b[1] = qs * cn_p / P[P_MASS]
-    f_b[2] = qs * cn_y / P[P_MASS]
-    m_b = np.empty(3)
-    m_b[0] = A.roll_moment(qbar, speed, s[10], d_roll, beta_m, aero, P[P_KLIFT], P[P_KCTRL])
-    m_b[1] = -qsd * cm_y     # yaw plane: nose towards +z_b is a negative rotation about y_b
-    m_b[2] = qsd * cm_p
-    # --- rigid body
-    ds[0:3] = s[3:6]
-    ds[3:6] = _mat_vec(rot, f_b)
-    ds[4] -= P[P_G]
-    ds[6:10] = quat_rate(s[6:10], s[10:13])
-    inertia = np.empty(3)
-    inertia[0] = P[P_IXX]
-    inertia[1] = P[P_IYY]
-    inertia[2] = P[P_IYY]
-    ds[10:13] = euler_rates(s[10:13], inertia, m_b)
-    # --- autopilot: three-loop in pitch (rate ω_z) and yaw (rate −ω_y), roll-angle hold
-    rate_p = s[12]
-    rate_y = -s[11]
-    ds[21] = P[P_WI] * (rate_p + P[P_KA] * (f_b[1] - P[P_KDC] * cy))
-    ds[22] = P[P_WI] * (rate_y + P[P_KA] * (f_b[2] - P[P_KDC] * cz))
-    dc_p = P[P_KR] * (s[21] + rate_p)
-    dc_y = P[P_KR] * (s[22] + rate_y)
-    phi = math.atan2(-rot[1, 2], rot[1, 1])
-    dc_r = -(P[P_KPHI] * phi + P[P_KP] * s[10])
-    # --- fin mixing and actuators
-    dmax, rmax, wa, za = P[P_DMAX], P[P_RMAX], P[P_WACT], P[P_ZACT]
-    for i in range(4):
-        if i == 0:
-            c = -dc_y + dc_r
-        elif i == 1:
-            c = dc_p + dc_r
-        elif i == 2:
-            c = dc_y + dc_r
-        else:
-            c = -dc_p + dc_r
-        c = min(max(c, -dmax), dmax)
-        rate = s[17 + i]
-        acc = wa * wa * (c - s[13 + i]) - 2.0 * za * wa * rate
-        if (rate >= rmax and acc > 0) or (rate <= -rmax and acc < 0):
-            acc = 0.0
-        pos_rate = rate
-        if (s[13 + i] >= dmax and rate > 0) or (s[13 + i] <= -dmax and rate < 0):
-            pos_rate = 0.0
-        ds[13 + i] = pos_rate
-        ds[17 + i] = acc
-    # --- diagnostics
-    diag[0:3] = pt
-    diag[3] = cy
-    diag[4] = cz
-    diag[5] = f_b[1]
-    diag[6] = f_b[2]
-    diag[7] = alpha
-    diag[8] = alpha_y
-    diag[9] = mach
-    diag[10] = math.sqrt(np.dot(r, r))
-    diag[11] = vc
-    diag[12] = dc_p
-    diag[13] = dc_y
-    diag[14] = dc_r
-    diag[15] = phi
-
-
-@njit(cache=True)
-def _apply_stops(s, dmax, rmax):
-    for i in range(4):
-        if s[13 + i] > dmax:
-            s[13 + i] = dmax
-            s[17 + i] = min(s[17 + i], 0.0)
-        elif s[13 + i] < -dmax:
-            s[13 + i] = -dmax
-            s[17 + i] = max(s[17 + i], 0.0)
-        s[17 + i] = min(max(s[17 + i], -rmax), rmax)
-
-
-@njit(cache=True)
-def _range_rate_sign(t, s, P, tgt):
-    pt, vt, _ = level_turn(t, tgt[0:3], tgt[3:6], tgt[6:9], P[P_TSPEED], P[P_TOMEGA], P[P_TSTART])
-    return np.dot(pt - s[0:3], vt - s[3:6])
-
-
-@njit(cache=True)
-def run_engagement(s0, P, aero, air, tgt, dt, n_steps, every):
+def advance(m, s0, dt, n_steps, every):
     """Advance from s0 (t = 0) with RK4 step dt [s] for at most n_steps, recording every
-    ``every`` steps. Returns (times (m,), states (m, N_STATE), diags (m, N_DIAG), status,
-    t_prev, s_prev, t_last, s_last) where the last two steps bracket the closest approach when
-    status == STATUS_CLOSEST."""
+    ``every`` steps. Returns (times (k,), states (k, N_STATE), diags (k, N_DIAG), status, t_prev,
+    s_prev, t_last, s_last); the last two steps bracket the closest approach when
+    status == STATUS_CLOSEST. Stops with STATUS_SUBSONIC below the airframe's supersonic-edge Mach."""
     n_rec = n_steps // every + 2
-    times = np.empty(n_rec)
-    states = np.empty((n_rec, N_STATE))
-    diags = np.empty((n_rec, N_DIAG))
-    k1 = np.empty(N_STATE)
-    k2 = np.empty(N_STATE)
-    k3 = np.empty(N_STATE)
-    k4 = np.empty(N_STATE)
-    diag = np.empty(N_DIAG)
-    s = s0.copy()
-    s_prev = s0.copy()
-    t = 0.0
-    derivative(t, s, P, aero, air, tgt, k1, diag)
-    times[0] = t
-    states[0] = s
-    diags[0] = diag
-    m = 1
+    times, states, diags = np.empty(n_rec), np.empty((n_rec, N_STATE)), np.empty((n_rec, N_DIAG))
+    s, s_prev, t, t_prev = s0.copy(), s0.copy(), 0.0, 0.0
+    times[0], states[0], diags[0] = t, s, diagnostics(t, s, m)
+    k = 1
     status = STATUS_T_END
-    rdot_prev = _range_rate_sign(t, s, P, tgt)
-    t_prev = t
+    rdot_prev = range_rate_sign(t, s, m)
     for step in range(1, n_steps + 1):
-        s_prev[:] = s
-        t_prev = t
-        derivative(t, s, P, aero, air, tgt, k1, diag)
-        derivative(t + 0.5 * dt, s + 0.5 * dt * k1, P, aero, air, tgt, k2, diag)
-        derivative(t + 0.5 * dt, s + 0.5 * dt * k2, P, aero, air, tgt, k3, diag)
-        derivative(t + dt, s + dt * k3, P, aero, air, tgt, k4, diag)
-        s += dt / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
-        _apply_stops(s, P[P_DMAX], P[P_RMAX])
+        s_prev, t_prev = s, t
+        s = rk4_step(t, s, dt, m)
         t = step * dt
-        if not np.all(np.isfinite(s)):
-            status = STATUS_NONFINITE
+        status = _status(t, s, m)
+        if status == STATUS_NONFINITE or status == STATUS_OUT_OF_AIR_TABLE:
             break
-        rdot = _range_rate_sign(t, s, P, tgt)
-        alt = P[P_ALT0] + s[1]
-        if alt < air[0] or alt > air[0] + air[1] * (air[2] - 1):
-            status = STATUS_OUT_OF_AIR_TABLE
-            break
-        _rho, a_sound = _interp_air(alt, air)
-        if math.sqrt(np.dot(s[3:6], s[3:6])) < P[P_MACH_MIN] * a_sound:
-            status = STATUS_SUBSONIC
+        rdot = range_rate_sign(t, s, m)
         done = rdot_prev < 0.0 and rdot >= 0.0
         if done:
             status = STATUS_CLOSEST
         if step % every == 0 or done or status == STATUS_SUBSONIC:
-            derivative(t, s, P, aero, air, tgt, k1, diag)
-            times[m] = t
-            states[m] = s
-            diags[m] = diag
-            m += 1
+            times[k], states[k], diags[k] = t, s, diagnostics(t, s, m)
+            k += 1
         if done or status == STATUS_SUBSONIC:
             break
         rdot_prev = rdot
-    return times[:m], states[:m], diags[:m], status, t_prev, s_prev, t, s
+    return times[:k], states[:k], diags[:k], status, t_prev, s_prev, t, s

@@ -17,8 +17,8 @@ from flexnet_fe.errors import FlexnetError
 STAGES = ("deploy", "collide", "shell", "flight")
 """Pipeline stages in the order they run (``flexnet_fe.config.Stage``)."""
 
-STATES = ("pending", "running", "done", "failed")
-"""The states ``status.json`` may hold; anything else is reported as unknown."""
+STATES = ("pending", "running", "done", "failed", "interrupted", "stale")
+"""The states ``status.json`` may hold (``flexnet_fe.runs.STATES``); anything else is reported as unknown."""
 
 FIN_PEAK_KEY = "peak_von_mises_pa"
 """A shell-summary entry that is a dict with this key is one fin's result."""

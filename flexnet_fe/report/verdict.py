@@ -154,6 +154,10 @@ def collect_warnings(run: RunData, fins: tuple[FinVerdict, ...]) -> list[Warning
         elif s.state == "running":
             out.append(Warning_(s.name, "stage still 'running' in status.json: running now, or "
                                         "interrupted (killed) — its files may be partial"))
+        elif s.state == "interrupted":
+            out.append(Warning_(s.name, f"stage INTERRUPTED: {s.error or 'outputs up to the interrupt kept'}"))
+        elif s.state == "stale":
+            out.append(Warning_(s.name, "stage STALE: an upstream stage changed or failed since it ran; no result"))
         elif s.state in ("pending", "unknown") and s.requested:
             out.append(Warning_(s.name, f"requested by the case but '{s.state}': no result"))
         elif s.state == "done" and s.section is None:

@@ -7,8 +7,10 @@ import logging
 import numpy as np
 import pytest
 
-from flexnet_fe.flight.config import FlightConfig
-from flexnet_fe.flight.damage import damage_from_shell, read_cell_field
+from flexnet_fe.flight.config import DamageLawConfig, FlightConfig
+from flexnet_fe.flight.damage import damage_from_shell, neuber_strain, read_cell_field
+from flexnet_fe.io import atomic_write_json
+from flexnet_fe.missile.config import FinMaterial
 
 dolfinx = pytest.importorskip("dolfinx")
 
@@ -43,23 +45,45 @@ def test_overstressed_area_share_is_exact_geometry(tmp_path, cell_type):
     assert areas[values > 503e6].sum() == pytest.approx(0.5, rel=1e-12)
 
 
+def test_neuber_strain_law():
+    # Neuber's rule for an elastic–perfectly-plastic material: σ ε = σ_e²/E with σ = σ_y above yield;
+    # continuous at σ_y; elastic below.
+    e, sy = 71.7e9, 503e6
+    eps = neuber_strain(np.array([100e6, sy, 2 * sy]), e, sy)
+    assert eps == pytest.approx([100e6 / e, sy / e, 4 * sy / e], rel=1e-15)
+
+
 def test_damage_fractions_and_stage_use_them(tmp_path):
     from dolfinx.mesh import CellType
 
-    shell = tmp_path / "shell"
+    run = tmp_path / "run"
+    shell = run / "shell"
     _write_envelope(shell / "wing_1" / "envelope.xdmf", CellType.quadrilateral, 4, 2,
-                    lambda x, y: np.where(x < 1.0, 600e6, 1e6))          # half of wing_1 overstressed
+                    lambda x, y: np.where(x < 1.0, 600e6, 1e6))          # half of wing_1 over 503 MPa
     _write_envelope(shell / "rudder_2" / "envelope.xdmf", CellType.quadrilateral, 4, 2,
-                    lambda x, y: np.full_like(x, 900e6))                  # rudder_2 entirely
-    d = damage_from_shell(shell, 503e6)
-    # wings: (0.5 + 0 + 0 + 0)/4; rudders: 1 − (1 + 0 + 0 + 0)/4
-    assert d.per_fin == {"rudder_2": pytest.approx(1.0), "wing_1": pytest.approx(0.5)}
-    assert d.wing_damage == pytest.approx(0.125) and d.rudder_effectiveness == pytest.approx(0.75)
-    flight = FlightConfig(dt=2e-4, output_dt=2e-3, damage_from_shell=True, damage_allowable_stress=503e6)
-    summary = run_flight_in(tmp_path / "flight", flight, shell)
+                    lambda x, y: np.full_like(x, 9.0e9))                  # rudder_2: ε = σ²/(Eσ_y) = 2.2
+    mat = FinMaterial()
+    # overstressed_area at the material's allowable (no shell summary: the fin material's yield)
+    fins, link = damage_from_shell(shell, DamageLawConfig(law="overstressed_area"), mat)
+    assert link["lost_area_fraction"] == {"rudder_2": pytest.approx(1.0), "wing_1": pytest.approx(0.5)}
+    assert fins.wing_damage == pytest.approx(0.125) and fins.rudder_effectiveness == pytest.approx(0.75)
+    assert link["allowable_pa"]["wing_1"] == mat.yield_strength
+    # failure_strain: 600 MPa gives ε = 600²/(71.7e3 · 503) = 1.0 % < 11 %: wing_1 intact; rudder_2 lost
+    fins, _ = damage_from_shell(shell, DamageLawConfig(law="failure_strain"), mat)
+    assert fins.remaining == pytest.approx([1, 1, 1, 1, 1, 0, 1, 1])
+    # the allowable comes from the shell summary when the shell stage wrote it (its one home is the
+    # fin material; the shell passes it on): 700 MPa leaves wing_1 intact
+    atomic_write_json(run / "summary.json", {"shell": {"wing_1": {"allowable_pa": 700e6},
+                                                      "rudder_2": {"allowable_pa": 700e6}}})
+    fins, link = damage_from_shell(shell, DamageLawConfig(law="overstressed_area"), mat)
+    assert link["allowable_pa"]["wing_1"] == 700e6 and fins.remaining[0] == 1.0
+    flight = FlightConfig(dt=5e-4, output_dt=5e-3, damage_from_shell=True,
+                          damage_law=DamageLawConfig(law="overstressed_area", threshold_factor=0.5))
+    summary = run_flight_in(tmp_path / "flight", flight, shell)           # 350 MPa: half of wing_1 lost
     assert summary["wing_damage"] == pytest.approx(0.125)
     assert summary["rudder_effectiveness"] == pytest.approx(0.75)
-    assert summary["damage_from_shell"]["overstressed_area_fraction"]["wing_1"] == pytest.approx(0.5)
+    assert summary["damage_from_shell"]["lost_area_fraction"]["wing_1"] == pytest.approx(0.5)
+    assert summary["fin_remaining"]["wing_1"] == pytest.approx(0.5)
 
 
 def run_flight_in(stage_dir, flight, shell_dir):
@@ -69,6 +93,6 @@ def run_flight_in(stage_dir, flight, shell_dir):
     return run_flight(flight, 8000.0, stage_dir, logging.getLogger("test.flight"), shell_dir=shell_dir)
 
 
-def test_damage_from_shell_needs_an_allowable_stress():
-    with pytest.raises(ValueError, match="damage_allowable_stress"):
-        FlightConfig(damage_from_shell=True)
+def test_old_second_home_of_the_allowable_is_refused():
+    with pytest.raises(ValueError, match="damage_allowable_stress is gone"):
+        FlightConfig(damage_from_shell=True, damage_allowable_stress=503e6)
