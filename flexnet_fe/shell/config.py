@@ -40,9 +40,9 @@ class ShellConfig(Section):
     shear_correction: Positive = Field(5.0 / 6.0, description="transverse shear factor κ [-]")
     rayleigh_alpha: NonNegative = Field(0.0, description="mass-proportional damping α [1/s]")
     rayleigh_beta: NonNegative = Field(0.0, description="stiffness-proportional damping β [s]")
-    history_interval: Positive | None = Field(
-        None, description="time between stress samples (history.csv rows, envelope) [s]; "
-                          "default: end_time / 400")
+    history_interval: Positive = Field(
+        2e-6, description="time between stress samples (history.csv rows, envelope, peak "
+                          "search) [s]; rounded to a whole number of steps (at least 1)")
     field_interval: Positive | None = Field(
         None, description="time between XDMF field outputs [s]; default: end_time / 40")
     fins: FinSelection = Field(FinSelection.LOADED, description="all | loaded | named")
@@ -52,8 +52,15 @@ class ShellConfig(Section):
     end_margin: NonNegative = Field(
         2e-3, description="time simulated after the last collision sample when end_time is not "
                           "given [s]")
-    power_iterations: int = Field(
-        1000, ge=20, description="iterations of the power method for λ_max(M⁻¹K) [-]")
+    lanczos_steps: int = Field(
+        40, ge=5, le=400, description="Lanczos steps for λ_max(M⁻¹K), hence dt_crit [-]")
+    backend: Literal["auto", "compiled", "petsc"] = Field(
+        "auto", description="explicit step: 'compiled' (numba kernel, one process), 'petsc' "
+                            "(Mat.mult per step, any number of MPI processes) or 'auto' "
+                            "(compiled on one process, petsc under MPI)")
+    peak_error_tolerance: Positive = Field(
+        0.02, description="a fin's peak von Mises whose estimated relative error exceeds this "
+                          "adds a line to summary.shell.warnings [-]")
     energy_growth_limit: Positive = Field(
         10.0, gt=1.0,
         description="stop as unstable when kinetic + strain energy exceeds this factor times "
