@@ -212,9 +212,10 @@ def _split_row(K, i, u, v, y, beta):
 
 @njit(cache=True)
 def node_update(u, v, f5, y, minv, wfix, nrm, i, h, dt, alpha):
-    """Central-difference update of node i's 5 DOFs with its load f5 (5,):
-    a = M⁻¹(f − y) − α v, minus its normal part at w-fixed nodes (a ← a − (a·n) n, re-masked by
-    M⁻¹ > 0: w = u·n = 0 is kept exactly when it holds at the start); v += h a; u += dt v.
+    """Central-difference update of node i's 5 DOFs with its load f5 (5,) (frame B):
+    a = M⁻¹(f − y) − α v; v += h a; u += dt v; at w-fixed nodes the normal parts of v and u are
+    removed (v ← v − (v·n) n, re-masked by M⁻¹ > 0), which is the constrained update
+    a ← a − (a·n) n with the round-off of the projection kept from accumulating.
     Returns the node's f·Δu [J]."""
     b = NB * i
     a0 = minv[b] * (f5[0] - y[b]) - alpha * v[b]
@@ -222,21 +223,24 @@ def node_update(u, v, f5, y, minv, wfix, nrm, i, h, dt, alpha):
     a2 = minv[b + 2] * (f5[2] - y[b + 2]) - alpha * v[b + 2]
     a3 = minv[b + 3] * (f5[3] - y[b + 3]) - alpha * v[b + 3]
     a4 = minv[b + 4] * (f5[4] - y[b + 4]) - alpha * v[b + 4]
-    if wfix[i] != 0.0:
-        an = a0 * nrm[0] + a1 * nrm[1] + a2 * nrm[2]
-        a0 = (a0 - an * nrm[0]) * (minv[b] > 0.0)
-        a1 = (a1 - an * nrm[1]) * (minv[b + 1] > 0.0)
-        a2 = (a2 - an * nrm[2]) * (minv[b + 2] > 0.0)
     v[b] += h * a0
     v[b + 1] += h * a1
     v[b + 2] += h * a2
     v[b + 3] += h * a3
     v[b + 4] += h * a4
+    if wfix[i] != 0.0:  # remove the normal part of v (and re-mask): no drift of w by round-off
+        vn = v[b] * nrm[0] + v[b + 1] * nrm[1] + v[b + 2] * nrm[2]
+        for a in range(3):
+            v[b + a] = (v[b + a] - vn * nrm[a]) * (minv[b + a] > 0.0)
     work = 0.0
     for a in range(NB):
         du = dt * v[b + a]
         u[b + a] += du
         work += f5[a] * du
+    if wfix[i] != 0.0:
+        un = u[b] * nrm[0] + u[b + 1] * nrm[1] + u[b + 2] * nrm[2]
+        for a in range(3):
+            u[b + a] -= un * nrm[a]
     return work
 
 
@@ -374,7 +378,7 @@ def _frame_accel(D, t, k, out):
     return k
 
 
-_FAST = {"contract", "reassoc", "nsz", "arcp"}  # no 'nnan'/'ninf': blow-ups must stay visible
+_FAST = {"contract"}  # no 'nnan'/'ninf': blow-ups must stay visible
 
 
 @njit(cache=True, fastmath=_FAST)

@@ -58,6 +58,8 @@ class RecoveryData(NamedTuple):
     """(E' [Pa], ν [-], t [m])"""
     num: np.ndarray
     """scratch (n_nodes, 6): projected numerators"""
+    C: np.ndarray
+    """∫ N_i ∂N_j/∂s_α dA per cell, (nc, 4, 4, 2) [m]"""
 
 
 def shape_q1(xi: np.ndarray, eta: np.ndarray) -> np.ndarray:
@@ -103,7 +105,8 @@ def build_recovery(cells: np.ndarray, x: np.ndarray, n_nodes: int, e1, e2, origi
     winv = np.where(w > 0, 1.0 / np.where(w > 0, w, 1.0), 0.0)
     return RecoveryData(cells=np.ascontiguousarray(cells, dtype=np.int32), dN=dN, wN=wN,
                         winv=winv, e1=np.asarray(e1, float), e2=np.asarray(e2, float),
-                        material=np.array(material, float), num=np.zeros((n_nodes, 6)))
+                        material=np.array(material, float), num=np.zeros((n_nodes, 6)),
+                        C=np.ascontiguousarray(np.einsum("cgi,cgja->cija", wN, dN)))
 
 
 @njit(cache=True)
@@ -132,58 +135,64 @@ def gauss_strains(R, u, c, out):
 
 @njit(cache=True)
 def accumulate_cells(R, u):
-    """R.num[i] = Σ_cells Σ_g N_i(g) w_g det J ε_h(g) (local numerators of the projection)."""
+    """R.num[i] = Σ_cells ∫ N_i ε_h dA (local numerators of the projection) with the cell
+    matrices C[c, i, j, α] = ∫ N_i ∂N_j/∂s_α dA (2 × 2 Gauss), so ε-numerators of node i are
+    Σ_j C_ij·(nodal values of j) — 8 products per node pair."""
     num = R.num
     num[:, :] = 0.0
-    g6 = np.empty((4, 6))
+    e1, e2, C = R.e1, R.e2, R.C
     for c in range(R.cells.shape[0]):
-        gauss_strains(R, u, c, g6)
-        for i in range(4):
-            n = R.cells[c, i]
-            for g in range(4):
-                w = R.wN[c, g, i]
-                for k in range(6):
-                    num[n, k] += w * g6[g, k]
+        for j in range(4):
+            b = NB * R.cells[c, j]
+            u1 = e1[0] * u[b] + e1[1] * u[b + 1] + e1[2] * u[b + 2]
+            u2 = e2[0] * u[b] + e2[1] * u[b + 1] + e2[2] * u[b + 2]
+            t1 = u[b + 3]
+            t2 = u[b + 4]
+            for i in range(4):
+                n = R.cells[c, i]
+                d1 = C[c, i, j, 0]
+                d2 = C[c, i, j, 1]
+                num[n, 0] += d1 * u1
+                num[n, 1] += d2 * u2
+                num[n, 2] += d2 * u1 + d1 * u2
+                num[n, 3] += d1 * t1
+                num[n, 4] += d2 * t2
+                num[n, 5] += d2 * t1 + d1 * t2
 
 
-@njit(cache=True)
-def surface_measures(E, nu, t, s6):
-    """(vm_top, vm_bot, p1_top, p1_bot) [Pa] of the strain measures s6 = (ε11, ε22, γ12, κ11,
-    κ22, 2κ12) (plane stress, z = ±t/2)."""
-    res = np.empty(4)
-    for k in range(2):
-        z = 0.5 * t if k == 0 else -0.5 * t
-        a = s6[0] + z * s6[3]
-        b = s6[1] + z * s6[4]
-        g = s6[2] + z * s6[5]
-        s11 = E * (a + nu * b)
-        s22 = E * (b + nu * a)
-        s12 = E * (1.0 - nu) * 0.5 * g
-        res[k] = np.sqrt(max(s11 * s11 + s22 * s22 - s11 * s22 + 3.0 * s12 * s12, 0.0))
-        res[2 + k] = 0.5 * (s11 + s22) + np.sqrt(0.25 * (s11 - s22) ** 2 + s12 * s12)
-    return res
+@njit(cache=True, inline="always")
+def _measures(E, nu, z, a, b, g):
+    """(von Mises, max principal) [Pa] of the strain (a, b, g) = (ε11, ε22, γ12) at height z."""
+    s11 = E * (a + nu * b)
+    s22 = E * (b + nu * a)
+    s12 = E * (1.0 - nu) * 0.5 * g
+    vm = np.sqrt(max(s11 * s11 + s22 * s22 - s11 * s22 + 3.0 * s12 * s12, 0.0))
+    return vm, 0.5 * (s11 + s22) + np.sqrt(0.25 * (s11 - s22) ** 2 + s12 * s12)
 
 
 @njit(cache=True)
 def nodal_from_numerators(R, u, nodal, n_owned):
-    """Nodal measures of the owned nodes from R.num; returns (max vm, its node, max p1,
-    max |u| over translations) over the owned nodes."""
+    """Nodal (vm_top, vm_bot, p1_top, p1_bot) [Pa] of the owned nodes from R.num (plane
+    stress at z = ±t/2 of the recovered ε*, κ*); returns (max vm, its node, max p1, max |u|
+    over translations) over the owned nodes."""
     E, nu, t = R.material[0], R.material[1], R.material[2]
+    z = 0.5 * t
     vmax, node, p1max, umax = 0.0, -1, -np.inf, 0.0
-    s6 = np.empty(6)
+    num, winv = R.num, R.winv
     for i in range(n_owned):
-        for k in range(6):
-            s6[k] = R.num[i, k] * R.winv[i]
-        m = surface_measures(E, nu, t, s6)
-        for k in range(4):
-            nodal[i, k] = m[k]
-        vm = max(m[0], m[1])
+        w = winv[i]
+        e0, e1, e2 = num[i, 0] * w, num[i, 1] * w, num[i, 2] * w
+        k0, k1, k2 = num[i, 3] * w, num[i, 4] * w, num[i, 5] * w
+        vt, pt = _measures(E, nu, z, e0 + z * k0, e1 + z * k1, e2 + z * k2)
+        vb, pb = _measures(E, nu, z, e0 - z * k0, e1 - z * k1, e2 - z * k2)
+        nodal[i, 0], nodal[i, 1], nodal[i, 2], nodal[i, 3] = vt, vb, pt, pb
+        vm = max(vt, vb)
         if vm > vmax:
             vmax, node = vm, i
-        p1max = max(p1max, m[2], m[3])
+        p1max = max(p1max, pt, pb)
         b = NB * i
-        umax = max(umax, np.sqrt(u[b] ** 2 + u[b + 1] ** 2 + u[b + 2] ** 2))
-    return vmax, node, p1max, umax
+        umax = max(umax, u[b] * u[b] + u[b + 1] * u[b + 1] + u[b + 2] * u[b + 2])
+    return vmax, node, p1max, np.sqrt(umax)
 
 
 @njit(cache=True)

@@ -268,3 +268,23 @@ def _owned_rows(V, G: sparse.csr_matrix, comm) -> sparse.csr_matrix:
     cc = np.concatenate([x[1] for x in recv]).astype(np.int64)
     vv = np.concatenate([x[2] for x in recv])
     return (own + sparse.csr_matrix((vv, (rr, cc)), shape=own.shape)).tocsr()
+
+
+def locate_in_cells(fg: FinGeometry, points: np.ndarray, weights: np.ndarray,
+                    direction: np.ndarray) -> np.ndarray:
+    """Consistent nodal forces of the owned DOFs (n_owned·5,) [N] of point forces
+    ``weights[q] · direction`` [N] at in-plane points ``points`` (m, 3) [m]: f_i = Σ_q w_q N_i(x_q)
+    (a quadrature of a distributed load). Raises ValueError for a point outside the fin."""
+    cell, X, mine, found = _locate(fg, np.asarray(points, dtype=float))
+    if not found.all():
+        k = int(np.flatnonzero(~found)[0])
+        raise ValueError(f"load point {points[k]} m lies outside the fin")
+    cl, Xa, w = cell[mine], X[mine], np.asarray(weights, dtype=float)[mine]
+    N = _shape_q1(Xa[:, 0], Xa[:, 1])
+    V = fg.V
+    blocks = V.dofmap.list.array.reshape(-1, 4)[cl]
+    rows = (blocks[:, :, None] * NDOF_NODE + np.arange(3)[None, None, :]).ravel()
+    vals = ((w[:, None] * N)[:, :, None] * np.asarray(direction, float)[None, None, :]).ravel()
+    n_loc = (V.dofmap.index_map.size_local + V.dofmap.index_map.num_ghosts) * NDOF_NODE
+    G = sparse.csr_matrix((vals, (rows, np.zeros_like(rows))), shape=(n_loc, 1))
+    return np.asarray(_owned_rows(V, G, fg.mesh.comm).todense()).ravel()

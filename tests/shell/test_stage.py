@@ -144,10 +144,11 @@ def test_two_processes_give_the_same_history(tmp_path):
     a = read_history_csv(tmp_path / "serial" / "wing" / "history.csv")
     b = read_history_csv(tmp_path / "parallel" / "wing" / "history.csv")
     for k in a:
-        # Reference: the serial run. Only the summation order of the sparse products and
-        # reductions differs, so histories agree to round-off; the issue's bound is 1e-8.
+        # Reference: the serial run (compiled kernel). The 2-process run steps with PETSc
+        # (Mat.mult per step) and completes the stress recovery by a reverse scatter: only the
+        # summation order differs, so histories agree to round-off; bound 1e-10 (issue 10).
         scale = np.nanmax(np.abs(a[k])) or 1.0
-        np.testing.assert_allclose(b[k], a[k], rtol=0, atol=1e-8 * scale, err_msg=k)
+        np.testing.assert_allclose(b[k], a[k], rtol=0, atol=1e-10 * scale, err_msg=k)
 
 
 def test_runs_on_the_missile_meshers_fin(tmp_path):
