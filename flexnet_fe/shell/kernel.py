@@ -146,7 +146,7 @@ def split_upper(K: BlockUpper, T: np.ndarray, *, tol: float = 1e-10) -> SplitUpp
     """:class:`SplitUpper` of the frame-B block matrix K with the nodal rotation T
     (:func:`node_rotation`): B̃ = T B Tᵀ. Raises ValueError if the membrane–bending coupling of
     B̃ is not negligible (|coupling| > tol × |B̃|: the shell is not flat)."""
-    Bt = np.einsum("ab,pbc,dc->pad", T, K.blocks, T)
+    Bt = np.matmul(np.matmul(T, K.blocks), T.T)
     scale = np.abs(Bt).max(initial=0.0)
     cpl = max(np.abs(Bt[:, :2, 2:]).max(initial=0.0), np.abs(Bt[:, 2:, :2]).max(initial=0.0))
     if cpl > tol * scale:

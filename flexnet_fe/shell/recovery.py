@@ -86,7 +86,8 @@ def cell_geometry(xc2: np.ndarray, ref: np.ndarray):
     if np.any(det[:, :1] * det <= 0):
         raise ValueError("fin mesh has a folded or degenerate quadrilateral")
     det = np.abs(det)
-    Jinv = np.linalg.inv(J)
+    Jinv = np.stack([np.stack([J[..., 1, 1], -J[..., 0, 1]], -1),
+                     np.stack([-J[..., 1, 0], J[..., 0, 0]], -1)], -2) / det[..., None, None]
     dN = np.einsum("mjb,cmba->cmja", dR, Jinv)
     return dN, det, N
 
