@@ -14,6 +14,7 @@ from typing import Literal
 from pydantic import Field, model_validator
 
 from flexnet_fe.schema import NonNegative, Positive, Section
+from flexnet_fe.shell.forms import Support
 
 
 class FinSelection(str, Enum):
@@ -25,6 +26,25 @@ class FinSelection(str, Enum):
     """only fins that received at least one contact event in the collision stage"""
     NAMED = "named"
     """the fins listed in ``shell.fin_names``"""
+
+
+class PressureLoad(Section):
+    """``[shell.load]``: a uniform pressure history on every solved fin, instead of the
+    collision loads (for checking the solver on a fin of one's own; a plate: see
+    :mod:`flexnet_fe.shell.api`)."""
+
+    times: tuple[float, ...] = Field(description="sample times, increasing [s]")
+    pressure: tuple[float, ...] = Field(
+        description="pressure along the fin normal n at the sample times, linear in between, "
+                    "zero outside [Pa]")
+
+    @model_validator(mode="after")
+    def _check(self) -> "PressureLoad":
+        if len(self.times) < 2 or len(self.times) != len(self.pressure):
+            raise ValueError("times and pressure need the same length (>= 2)")
+        if any(b <= a for a, b in zip(self.times, self.times[1:])):
+            raise ValueError("times must increase")
+        return self
 
 
 class ShellConfig(Section):
@@ -44,8 +64,16 @@ class ShellConfig(Section):
         2e-6, description="time between stress samples (history.csv rows, envelope, peak "
                           "search) [s]; rounded to a whole number of steps (at least 1)")
     field_interval: Positive | None = Field(
-        None, description="time between XDMF field outputs [s]; default: end_time / 40")
+        None, description="time between XDMF field outputs [s]; default: end_time / 20 (plus a "
+                          "frame at each fin's peak instant)")
     fins: FinSelection = Field(FinSelection.LOADED, description="all | loaded | named")
+    supports: dict[Literal["root", "leading_edge", "tip", "trailing_edge"], Support] = Field(
+        default_factory=lambda: {"root": Support.CLAMPED},
+        description="edge supports: clamped | simply_supported (w = 0 only) | "
+                    "simply_supported_hard | pinned | free; edges not listed are free")
+    load: PressureLoad | None = Field(
+        None, description="[shell.load]: a pressure history on every solved fin that replaces "
+                          "the collision loads (contacts and body acceleration)")
     fin_names: tuple[str, ...] = Field((), description="fins to solve when fins = 'named'")
     end_time: Positive | None = Field(
         None, description="simulated time [s]; default: last contact sample time + end_margin")

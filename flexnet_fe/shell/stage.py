@@ -127,6 +127,12 @@ CELL_NAME = "von_mises_pa"
 """DG0 field of ``fields.xdmf``: per cell the largest recovered von Mises of its nodes."""
 
 
+def pressure_history(model: ShellModel, times, pressure) -> LoadHistory:
+    """Uniform pressure p(t) [Pa] along +n: f_i = p ∫ N_i dA n (linear between samples)."""
+    from flexnet_fe.shell.api import pressure as api_pressure
+    return api_pressure(model, times, pressure)
+
+
 class _FieldWriter:
     """XDMF output: mesh written once, then one append-and-close per output frame. Scalar
     fields only (DESIGN.md §2): recovered nodal stresses as CG1, per-cell maxima as DG0, the
@@ -192,7 +198,7 @@ def _time_steps(model: ShellModel, shell: ShellConfig, end_time: float, log, nam
     dt = shell.safety_factor * dt_crit
     n_steps = max(1, math.ceil(end_time / dt))
     every = max(1, round(shell.history_interval / dt))
-    field_dt = shell.field_interval or end_time / 40.0
+    field_dt = shell.field_interval or end_time / 20.0
     field_every = max(every, round(field_dt / dt / every) * every)
     mat = model.material
     c_p = math.sqrt(mat.plane_stress_modulus / mat.density)
@@ -298,12 +304,21 @@ def run_shell(shell: ShellConfig, fins: list[FinSpec], contacts_npz: Path,
     ``dt_s`` (smallest), ``dt_crit_s`` (smallest), ``dofs`` (total), ``steps`` (total), ``wall_s``.
     """
     t0 = time.perf_counter()
-    contacts = read_fin_contacts(contacts_npz)
-    acc_t, acc = read_body_acceleration(collide_history_csv)
+    if shell.load is not None:  # a given pressure replaces the collision loads
+        contacts = FinContacts(fin_names=(), t=np.zeros(0), sample=np.zeros(0, np.int64),
+                               fin=np.zeros(0, np.int64), point=np.zeros((0, 3)),
+                               force=np.zeros((0, 3)), width=np.zeros(0))
+        acc_t, acc = np.zeros(0), np.zeros((0, 3))
+        shell = shell.model_copy(update={"fins": FinSelection.ALL}) if \
+            shell.fins is FinSelection.LOADED else shell
+    else:
+        contacts = read_fin_contacts(contacts_npz)
+        acc_t, acc = read_body_acceleration(collide_history_csv)
     unknown = [n for n in contacts.fin_names if n not in {f.name for f in fins}]
     if unknown:
         raise CaseError(str(contacts_npz), "fin_names", f"fin(s) {unknown} not in the missile model")
-    last = max(contacts.t[-1] if len(contacts.t) else 0.0, acc_t[-1] if len(acc_t) else 0.0)
+    last = max(contacts.t[-1] if len(contacts.t) else 0.0, acc_t[-1] if len(acc_t) else 0.0,
+               shell.load.times[-1] if shell.load is not None else 0.0)
     end_time = shell.end_time or last + shell.end_margin
     if end_time <= 0:
         raise CaseError("case.toml", "shell.end_time", "no contact samples and no end_time")
@@ -316,9 +331,13 @@ def run_shell(shell: ShellConfig, fins: list[FinSpec], contacts_npz: Path,
                             poisson_ratio=spec.poisson_ratio, density=spec.density,
                             yield_strength=spec.yield_strength,
                             shear_correction=shell.shear_correction)
-        model = build_model(fin_mesh, mat, shell.rotary_inertia_scale)
-        idx = contacts.fin_names.index(spec.name) if spec.name in contacts.fin_names else -1
-        loads = fin_load_history(model, contacts, idx, acc_t, acc)
+        model = build_model(fin_mesh, mat, shell.rotary_inertia_scale,
+                            supports=dict(shell.supports))
+        if shell.load is not None:
+            loads = pressure_history(model, shell.load.times, shell.load.pressure)
+        else:
+            idx = contacts.fin_names.index(spec.name) if spec.name in contacts.fin_names else -1
+            loads = fin_load_history(model, contacts, idx, acc_t, acc)
         res = solve_fin(model, loads, shell, end_time, Path(stage_dir) / spec.name, log,
                         name=spec.name)
         summary[spec.name] = res

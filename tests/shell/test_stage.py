@@ -177,3 +177,27 @@ def test_runs_on_the_missile_meshers_fin(tmp_path):
     uv = np.array([(p - fin.origin) @ fin.e1, (p - fin.origin) @ fin.e2])
     lo, hi = fin.uv.min(axis=0), fin.uv.max(axis=0)
     assert np.all(uv >= lo - 1e-9) and np.all(uv <= hi + 1e-9)  # inside the fin's bounding box
+
+
+def test_shell_load_option_runs_a_pressure_history_on_a_fin(tmp_path):
+    """[shell.load] + [shell.supports] (no collision stage needed): the stage gives the same
+    peak as the API on the same mesh and supports (wiring), and a bad support name is a one-line
+    config error naming the field."""
+    from pydantic import ValidationError
+    from flexnet_fe.shell import api
+    from flexnet_fe.shell.forms import ShellMaterial
+
+    write_plate_msh(tmp_path / "plate.msh", 12, 12, 0.2, 0.2)
+    spec = FinSpec("plate", tmp_path / "plate.msh", 2e-3, 70e9, 0.3, 2700.0, 300e6)
+    sup = {g: "simply_supported_hard" for g in ("root", "tip", "leading_edge", "trailing_edge")}
+    load = {"times": [0.0, 2.5e-4, 5e-4], "pressure": [0.0, 1e4, 0.0]}
+    cfg = ShellConfig(supports=sup, load=load, end_time=6e-4, history_interval=1e-9,
+                      rotary_inertia_scale=4.0)
+    s = run_shell(cfg, [spec], tmp_path / "none.npz", None, tmp_path / "out", _log())
+    mat = ShellMaterial(thickness=2e-3, youngs_modulus=70e9, poisson_ratio=0.3, density=2700.0)
+    m = api.plate(12, 12, 0.2, 0.2, mat, supports="simply_supported_hard", rotary_scale=4.0)
+    ref = api.solve(m, api.pressure(m, load["times"], load["pressure"]), 6e-4)
+    assert s["plate"]["peak_von_mises_pa"] == pytest.approx(ref.peak.value, rel=1e-9)
+    assert s["plate"]["peak_time_s"] == pytest.approx(ref.run.peak_t, rel=1e-12)
+    with pytest.raises(ValidationError, match="supports"):
+        ShellConfig(supports={"root": "glued"})
