@@ -34,7 +34,7 @@ logging.getLogger("FFCX").setLevel(logging.ERROR)
 logging.getLogger().setLevel(logging.WARNING)
 
 from flexnet_fe.shell import api, kernel as kn, navier  # noqa: E402
-from flexnet_fe.shell.explicit import (Backend, central_difference, critical_step,  # noqa: E402
+from flexnet_fe.shell.explicit import (central_difference, critical_step,  # noqa: E402
                                        max_eigenvalue, no_loads)
 from flexnet_fe.shell.forms import NDOF_NODE, ShellMaterial, Support  # noqa: E402
 from flexnet_fe.shell.mass import auto_rotary_scale  # noqa: E402

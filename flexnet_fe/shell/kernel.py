@@ -28,7 +28,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from flexnet_fe.shell.recovery import RecoveryData, sample_nodes
+from flexnet_fe.shell.recovery import sample_nodes
 
 NB = 5  # DOFs per node
 

@@ -193,7 +193,7 @@ def _sample0(D, R, St, H, Pm):
     sc[kn.S_NSAMP] = 1
 
 
-class _ParallelSampler:
+class ParallelSampler:
     """Nodal stresses under MPI: local numerators, reverse scatter (add), owned nodal values."""
 
     def __init__(self, model: ShellModel, R: RecoveryData):
@@ -224,7 +224,7 @@ def _run_petsc(model, loads, R, *, dt, n_steps, sample_every, frame_every, alpha
 
     op = model.op
     comm = op.comm
-    sampler = _ParallelSampler(model, R)
+    sampler = ParallelSampler(model, R)
     nn = op.n_owned // NDOF_NODE
     env = np.zeros((nn, 2))
     rows = {k: [] for k in ("t", "vm", "loc", "p1", "umax", "ke", "se", "work")}

@@ -32,7 +32,7 @@ from flexnet_fe.shell.forms import NDOF_NODE, ShellMaterial
 from flexnet_fe.shell.meshio import load_fin_mesh
 from flexnet_fe.shell.model import ShellModel, build_model
 from flexnet_fe.shell.recovery import locate_peak
-from flexnet_fe.shell.solve import _ParallelSampler, recovery_for, run
+from flexnet_fe.shell.solve import ParallelSampler, recovery_for, run
 
 ACCEL_COLUMNS = ("accel_body_x_mps2", "accel_body_y_mps2", "accel_body_z_mps2")
 
@@ -141,7 +141,7 @@ class _FieldWriter:
     def __init__(self, model: ShellModel, R, path: Path):
         mesh = model.V.mesh
         self.path = path
-        self.sampler = _ParallelSampler(model, R)
+        self.sampler = ParallelSampler(model, R)
         self.V0 = fem.FunctionSpace(mesh, ("DG", 0))
         self.V1 = fem.FunctionSpace(mesh, ("Lagrange", 1))
         self.nodal = [fem.Function(self.V1, name=n) for n in NODAL_NAMES]
@@ -237,10 +237,20 @@ def solve_fin(model: ShellModel, loads: LoadHistory, shell: ShellConfig, end_tim
     dt_crit, dt, n_steps, every, field_every, dofs = _time_steps(model, shell, end_time, log, name)
     R = recovery_for(model)
     writer = _FieldWriter(model, R, out_dir / "fields.xdmf")
-    res = run(model, loads, R, dt=dt, n_steps=n_steps, sample_every=every,
-              frame_every=field_every, alpha=shell.rayleigh_alpha, beta=shell.rayleigh_beta,
-              growth_limit=shell.energy_growth_limit, frame=writer.write,
-              backend=Backend(shell.backend))
+    with progress_bar(n_steps, f"shell {name}") as bar:
+        done = [0]
+
+        def frame(t: float, u: np.ndarray) -> None:
+            writer.write(t, u)
+            k = min(n_steps, int(round(t / dt)))
+            if k > done[0]:
+                bar.update(k - done[0])
+                done[0] = k
+
+        res = run(model, loads, R, dt=dt, n_steps=n_steps, sample_every=every,
+                  frame_every=field_every, alpha=shell.rayleigh_alpha, beta=shell.rayleigh_beta,
+                  growth_limit=shell.energy_growth_limit, frame=frame,
+                  backend=Backend(shell.backend))
     cols = {"t_s": res.t, "max_von_mises_pa": res.vm, "max_von_mises_x_m": res.loc[:, 0],
             "max_von_mises_y_m": res.loc[:, 1], "max_von_mises_z_m": res.loc[:, 2],
             "max_principal_pa": res.p1, "max_abs_u_m": res.umax, "kinetic_energy_j": res.ke,
