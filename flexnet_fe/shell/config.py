@@ -14,7 +14,7 @@ from typing import Literal
 from pydantic import Field, model_validator
 
 from flexnet_fe.schema import NonNegative, Positive, Section
-from flexnet_fe.shell.forms import Support
+from flexnet_fe.shell.supports import Support
 
 
 class FinSelection(str, Enum):

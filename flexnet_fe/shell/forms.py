@@ -38,7 +38,6 @@ bending on coarse meshes (parasitic shear of Q4) — in-plane bending is not the
 from __future__ import annotations
 
 from dataclasses import dataclass
-from enum import Enum
 
 import numpy as np
 import ufl
@@ -46,6 +45,7 @@ from dolfinx import fem
 from petsc4py import PETSc
 
 from flexnet_fe.shell.meshio import FinPlane
+from flexnet_fe.shell.supports import _SUPPORT_COMPONENTS, NORMAL_FIXED, Support  # noqa: F401
 
 NDOF_NODE = 5
 """DOFs per node: u_x, u_y, u_z [m] (frame B), θ_1, θ_2 [rad] (fin basis e1, e2)."""
@@ -238,29 +238,6 @@ def stiffness_forms(V: fem.FunctionSpace, plane: FinPlane, mat: ShellMaterial) -
             ks * Gi[0, 0] * gU2[0] * gW2[0] * dx_xi,
             ks * Gi[1, 1] * gU2[1] * gW2[1] * dx_eta,
             ks * Gi[0, 1] * (gUc[0] * gWc[1] + gUc[1] * gWc[0]) * dx_c]
-
-
-class Support(str, Enum):
-    """Edge support of the shell (a named choice; an unknown name is an error)."""
-
-    CLAMPED = "clamped"
-    """u and θ fixed (the fin root on the missile body)"""
-    SIMPLY_SUPPORTED = "simply_supported"
-    """w = u·n = 0 only: in-plane motion and rotations free (soft simple support)"""
-    SIMPLY_SUPPORTED_HARD = "simply_supported_hard"
-    """w = 0 and the fibre's tilt along the edge θ·s = 0 (Navier's support); the edge must run
-    along e1 or e2 of the fin basis; in-plane motion free"""
-    PINNED = "pinned"
-    """u fixed (all three components), θ free"""
-    FREE = "free"
-    """nothing fixed"""
-
-
-_SUPPORT_COMPONENTS = {Support.CLAMPED: (0, 1, 2, 3, 4), Support.PINNED: (0, 1, 2),
-                       Support.SIMPLY_SUPPORTED: (), Support.SIMPLY_SUPPORTED_HARD: (),
-                       Support.FREE: ()}
-NORMAL_FIXED = (Support.SIMPLY_SUPPORTED, Support.SIMPLY_SUPPORTED_HARD)
-"""supports that constrain w = u·n (a projection, since n need not be a frame axis)"""
 
 
 def edge_blocks(V: fem.FunctionSpace, facet_tags, tag: int) -> np.ndarray:

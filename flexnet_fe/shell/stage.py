@@ -2,9 +2,12 @@
 
 Inputs: the ``[shell]`` table, the fins (mesh + material), ``collide/fin_contacts.npz`` and
 ``collide/history.csv`` (rigid-body CG acceleration in B). Outputs in ``stage_dir/<fin>/``:
-``history.csv`` (float64), ``fields.xdmf`` (6 scalar DG0 stress fields + CG1 displacement,
-appended and closed at every output so a killed run keeps its earlier steps) and
-``envelope.xdmf`` (peak-over-time von Mises and maximum principal stress per cell).
+``history.csv`` (float64; per sample the largest recovered nodal von Mises and where; the peak
+row carries the located peak), ``fields.xdmf`` (recovered stresses as CG1 ``*_nodal_pa`` and as
+per-cell maxima DG0 ``von_mises_{top,mid,bottom}_pa``, CG1 displacement; frames every
+``field_interval`` plus each running peak's instant; appended and closed at every frame so a
+killed run keeps its earlier frames) and ``envelope.xdmf`` (peak over samples per node, CG1,
+and per cell, DG0 ``peak_von_mises_pa``, ``peak_max_principal_pa``).
 """
 
 from __future__ import annotations
@@ -31,7 +34,7 @@ from flexnet_fe.shell.explicit import (Backend, LoadHistory, critical_step, max_
 from flexnet_fe.shell.forms import NDOF_NODE, ShellMaterial
 from flexnet_fe.shell.meshio import load_fin_mesh
 from flexnet_fe.shell.model import ShellModel, build_model
-from flexnet_fe.shell.recovery import locate_peak
+from flexnet_fe.shell.recovery import locate_peak, stress_tensors, von_mises
 from flexnet_fe.shell.solve import ParallelSampler, recovery_for, run
 
 ACCEL_COLUMNS = ("accel_body_x_mps2", "accel_body_y_mps2", "accel_body_z_mps2")
@@ -120,11 +123,12 @@ def fin_load_history(model: ShellModel, contacts: FinContacts, fin_index: int,
                        mass_c=translational_mass(model.op))
 
 
-NODAL_NAMES = ("von_mises_top_pa", "von_mises_bottom_pa", "max_principal_top_pa",
-               "max_principal_bottom_pa")
+NODAL_NAMES = ("von_mises_top_nodal_pa", "von_mises_bottom_nodal_pa",
+               "max_principal_top_nodal_pa", "max_principal_bottom_nodal_pa")
 """Recovered nodal (CG1) stress fields of ``fields.xdmf``, in the sampler's column order."""
-CELL_NAME = "von_mises_pa"
-"""DG0 field of ``fields.xdmf``: per cell the largest recovered von Mises of its nodes."""
+CELL_NAMES = ("von_mises_top_pa", "von_mises_mid_pa", "von_mises_bottom_pa")
+"""DG0 fields of ``fields.xdmf``: per cell the largest recovered von Mises of its nodes on the
+top, mid (membrane only) and bottom surface."""
 
 
 def pressure_history(model: ShellModel, times, pressure) -> LoadHistory:
@@ -145,7 +149,8 @@ class _FieldWriter:
         self.V0 = fem.FunctionSpace(mesh, ("DG", 0))
         self.V1 = fem.FunctionSpace(mesh, ("Lagrange", 1))
         self.nodal = [fem.Function(self.V1, name=n) for n in NODAL_NAMES]
-        self.cell = fem.Function(self.V0, name=CELL_NAME)
+        self.cells_fn = [fem.Function(self.V0, name=n) for n in CELL_NAMES]
+        self.mid = fem.Function(self.V1)
         Vd = fem.VectorFunctionSpace(mesh, ("Lagrange", 1))
         self.disp = fem.Function(Vd, name="displacement_m")
         self.n_owned_cells = self.V0.dofmap.index_map.size_local
@@ -168,12 +173,16 @@ class _FieldWriter:
         nod = self.sampler.nodal
         for k, fn in enumerate(self.nodal):
             self.nodal_field(fn, nod[:, k])
-        both = np.maximum(self.nodal[0].x.array, self.nodal[1].x.array)
-        self.cell_max(self.cell, both)
+        R = self.sampler.R
+        n = len(nod)
+        mid = von_mises(stress_tensors(R.num[:n] * R.winv[:n, None], R, 0.0))
+        self.nodal_field(self.mid, mid)
+        for fn, src in zip(self.cells_fn, (self.nodal[0], self.mid, self.nodal[1])):
+            self.cell_max(fn, src.x.array)
         self.disp.x.array.reshape(-1, 3)[: len(nod)] = u_owned.reshape(-1, NDOF_NODE)[:, :3]
         self.disp.x.scatter_forward()
         with XDMFFile(self.V0.mesh.comm, str(self.path), "a") as f:
-            for fn in (*self.nodal, self.cell, self.disp):
+            for fn in (*self.nodal, *self.cells_fn, self.disp):
                 f.write_function(fn, t)
 
     def envelope(self, env: np.ndarray, path: Path) -> None:
@@ -251,8 +260,13 @@ def solve_fin(model: ShellModel, loads: LoadHistory, shell: ShellConfig, end_tim
                   frame_every=field_every, alpha=shell.rayleigh_alpha, beta=shell.rayleigh_beta,
                   growth_limit=shell.energy_growth_limit, frame=frame,
                   backend=Backend(shell.backend))
-    cols = {"t_s": res.t, "max_von_mises_pa": res.vm, "max_von_mises_x_m": res.loc[:, 0],
-            "max_von_mises_y_m": res.loc[:, 1], "max_von_mises_z_m": res.loc[:, 2],
+    pk = None if res.failed_at else _peak(model, R, res, writer)
+    vm, loc = res.vm.copy(), res.loc.copy()
+    if pk is not None:  # the peak row carries the located peak (≥ its nodal value)
+        i = int(np.argmax(res.vm))
+        vm[i], loc[i] = max(pk.value, vm[i]), pk.location
+    cols = {"t_s": res.t, "max_von_mises_pa": vm, "max_von_mises_x_m": loc[:, 0],
+            "max_von_mises_y_m": loc[:, 1], "max_von_mises_z_m": loc[:, 2],
             "max_principal_pa": res.p1, "max_abs_u_m": res.umax, "kinetic_energy_j": res.ke,
             "strain_energy_j": res.se, "external_work_j": res.work}
     if comm.rank == 0:
@@ -264,17 +278,16 @@ def solve_fin(model: ShellModel, loads: LoadHistory, shell: ShellConfig, end_tim
             f"kinetic + strain energy exceeds {shell.energy_growth_limit} × (initial energy + "
             f"external work); dt = {dt:.4e} s, dt_crit = {dt_crit:.4e} s "
             f"(dt/dt_crit = {dt / dt_crit:.3f})")
-    pk = _peak(model, R, res, writer)
     mat = model.material
     c_p = math.sqrt(mat.plane_stress_modulus / mat.density)
-    out = {"peak_von_mises_pa": pk.value if pk else 0.0, "peak_time_s": res.peak_t,
+    out = {"peak_von_mises_pa": float(vm.max(initial=0.0)), "peak_time_s": res.peak_t,
            "peak_location_m": [float(v) for v in pk.location] if pk else None,
            "peak_surface": pk.surface if pk else None,
            "peak_error_estimate_rel": pk.error_estimate_rel if pk else 0.0,
            "peak_nodal_von_mises_pa": max(res.peak_vm, 0.0),
            "peak_max_principal_pa": res.peak_p1,
            "allowable_pa": mat.yield_strength,
-           "peak_over_allowable": (pk.value if pk else 0.0) / mat.yield_strength,
+           "peak_over_allowable": float(vm.max(initial=0.0)) / mat.yield_strength,
            "max_abs_u_m": float(res.umax.max(initial=0.0)),
            "dt_s": dt, "dt_crit_s": dt_crit, "dt_element_estimate_s": model.h_min / c_p,
            "rotary_inertia_scale": model.rotary_scale, "dofs": dofs, "steps": n_steps,

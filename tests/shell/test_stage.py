@@ -18,7 +18,7 @@ from flexnet_fe.shell import stage as stage_mod
 from flexnet_fe.shell.config import FinSpec, ShellConfig
 from flexnet_fe.shell.meshio import write_plate_msh
 from flexnet_fe.shell.stage import run_shell
-from flexnet_fe.shell.stage import CELL_NAME, NODAL_NAMES
+from flexnet_fe.shell.stage import CELL_NAMES, NODAL_NAMES
 
 ROOT = Path(__file__).resolve().parents[2]
 PY = ROOT / ".venv" / "bin" / "python"
@@ -69,14 +69,14 @@ def test_stage_outputs(tmp_path):
     assert 0 < s["dt_s"] <= 0.9 * s["dt_crit_s"] * (1 + 1e-12)
     h = read_history_csv(out / "wing" / "history.csv")
     assert h["t_s"][-1] == pytest.approx(2e-3, abs=s["dt_s"])
-    # the summary's peak is at the history's maximum (same samples); its value is the recovered
-    # field's maximum around that node, so at least the nodal value, and located within h of it
+    # the summary's peak is the history's maximum (same samples); the peak row carries the
+    # located value (the recovered field's maximum in the cells around the peak node, so at
+    # least the nodal value) and its location, within a cell diagonal of the node
     i = int(np.argmax(h["max_von_mises_pa"]))
-    assert w["peak_nodal_von_mises_pa"] == h["max_von_mises_pa"][i]
+    assert w["peak_von_mises_pa"] == h["max_von_mises_pa"][i]
     assert w["peak_time_s"] == h["t_s"][i]
-    assert w["peak_von_mises_pa"] >= w["peak_nodal_von_mises_pa"]
-    node = np.array([h[f"max_von_mises_{c}_m"][i] for c in "xyz"])
-    assert np.linalg.norm(np.asarray(w["peak_location_m"]) - node) <= 0.3 / 12 * np.sqrt(2) + 1e-12
+    assert w["peak_von_mises_pa"] >= w["peak_nodal_von_mises_pa"] * (1 - 1e-12)
+    np.testing.assert_allclose(w["peak_location_m"], [h[f"max_von_mises_{c}_m"][i] for c in "xyz"])
     assert 1e6 < w["peak_von_mises_pa"] < 1e10 and w["peak_max_principal_pa"] > 0
     assert w["allowable_pa"] == 503e6 and 0 < w["peak_error_estimate_rel"] < 1
     assert isinstance(s["warnings"], list)
@@ -92,10 +92,10 @@ def test_stage_outputs(tmp_path):
     r.set_active_time_value(r.time_values[-1])
     blocks = r.read()
     names = [blocks.get_block_name(k) for k in range(blocks.n_blocks)]
-    assert set(NODAL_NAMES) | {CELL_NAME, "displacement_m"} <= set(names)
-    vm = blocks[names.index("von_mises_top_pa")].point_data["von_mises_top_pa"]
+    assert set(NODAL_NAMES) | set(CELL_NAMES) | {"displacement_m"} <= set(names)
+    vm = blocks[names.index(NODAL_NAMES[0])].point_data[NODAL_NAMES[0]]
     assert vm.shape == (13 * 7,) and np.all(np.isfinite(vm))
-    cm = blocks[names.index(CELL_NAME)].cell_data[CELL_NAME]
+    cm = blocks[names.index("von_mises_top_pa")].cell_data["von_mises_top_pa"]
     assert cm.shape == (72,) and np.all(np.isfinite(cm))
     env = pv.XdmfReader(str(out / "wing" / "envelope.xdmf")).read()
     en = [env.get_block_name(k) for k in range(env.n_blocks)]
