@@ -64,7 +64,7 @@ class ShellConfig(Section):
         2e-6, description="time between stress samples (history.csv rows, envelope, peak "
                           "search) [s]; rounded to a whole number of steps (at least 1)")
     field_interval: Positive | None = Field(
-        None, description="time between XDMF field outputs [s]; default: end_time / 20 (plus a "
+        None, description="time between XDMF field outputs [s]; default: end_time / 10 (plus a "
                           "frame at each fin's peak instant)")
     fins: FinSelection = Field(FinSelection.LOADED, description="all | loaded | named")
     supports: dict[Literal["root", "leading_edge", "tip", "trailing_edge"], Support] = Field(

@@ -84,8 +84,8 @@ def test_stage_outputs(tmp_path):
     os.environ.setdefault("PYVISTA_OFF_SCREEN", "true")
     pv = pytest.importorskip("pyvista")
     r = pv.XdmfReader(str(out / "wing" / "fields.xdmf"))
-    # t = 0, 0.25 ms, ..., 2 ms, plus the running peak's instants (at most one per interval),
-    # one of which is the final peak time
+    # t = 0, 0.25 ms, ..., 2 ms (field_interval), plus the running peak's instants (at most one
+    # per interval), one of which is the final peak time
     times = np.asarray(r.time_values)
     assert 9 <= len(times) <= 17 and np.all(np.diff(times) > 0)
     assert np.min(np.abs(times - w["peak_time_s"])) < 1e-6 * w["peak_time_s"]
