@@ -422,12 +422,12 @@ _FAST = {"contract"}  # no 'nnan'/'ninf': blow-ups must stay visible
 
 
 @njit(cache=True, fastmath=_FAST)
-def _fused_step(D, P, St, x, h, acc3, want_se):
+def _fused_step(D, P, St, x, h, acc3, want_se, want_ke):
     """One central-difference step (see module doc) on :class:`SplitUpper` storage, local frame.
     ``x`` is u itself when β = 0, else a copy of u + β v made before the step (rows j > i read
     x_j before node j is updated, so either is the pre-step value).
-    Returns (½uᵀKu of the state before the step (valid when β = 0), f·Δu of the step,
-    ½ vᵀMv after it)."""
+    Returns (½uᵀKu of the state before the step (when ``want_se``), f·Δu of the step,
+    ½ vᵀMv after it (when ``want_ke``))."""
     K = D.K
     ind, M, B, ptr = K.indices, K.mem, K.bend, K.indptr
     u, v, fe, y = St.u, St.v, St.fext, St.y
@@ -491,8 +491,9 @@ def _fused_step(D, P, St, x, h, acc3, want_se):
         u[bi + 3] += dt * v3
         u[bi + 4] += dt * v4
         work += dt * (f0 * v0 + f1 * v1 + f2 * v2 + f3 * v3 + f4 * v4)
-        ke += 0.5 * (mass[bi] * (v0 * v0 + v1 * v1 + v2 * v2)
-                     + mass[bi + 3] * v3 * v3 + mass[bi + 4] * v4 * v4)
+        if want_ke:  # only at sample steps: saves streaming m on the others
+            ke += 0.5 * (mass[bi] * (v0 * v0 + v1 * v1 + v2 * v2)
+                         + mass[bi + 3] * v3 * v3 + mass[bi + 4] * v4 * v4)
         y[bi] = 0.0
         y[bi + 1] = 0.0
         y[bi + 2] = 0.0
@@ -536,9 +537,11 @@ def advance_steps(D, P, R, St, H, n_steps):
         if P.beta != 0.0:
             for r in range(len(St.u)):
                 St.x[r] = St.u[r] + P.beta * St.v[r]
-            se_prev, work, ke = _fused_step(D, P, St, St.x, h, acc3, False)
+            se_prev, work, ke = _fused_step(D, P, St, St.x, h, acc3, False,
+                                            step % P.sample_every == 0)
         else:
-            se_prev, work, ke = _fused_step(D, P, St, St.u, h, acc3, pending >= 0)
+            se_prev, work, ke = _fused_step(D, P, St, St.u, h, acc3, pending >= 0,
+                                            step % P.sample_every == 0)
         if kL >= 0:  # restore the scratch to zero on the loaded DOFs only
             for col in (kL, kL + 1):
                 if col < len(D.times):
