@@ -1,12 +1,18 @@
-"""Explicit shell solver benchmark: time per step and per DOF, achieved memory bandwidth vs a
-STREAM triad measured in the same run, matrix formats side by side, 1 vs 2 MPI processes, and
-the effect of rotary-inertia scaling on a paper-sized fin.
+"""Shell solver benchmark (issue 10): step speed against a STREAM triad measured in the same run,
+set-up time, accuracy versus CPU on the plate-pulse problem, and the paper fins' peak stress
+under mesh refinement (reproducible on any collision run directory).
 
-    .venv/bin/python benchmarks/bench_shell.py            # everything (launches mpirun -n 2)
-    .venv/bin/python benchmarks/bench_shell.py --quick    # 1e4 DOFs only
+    .venv/bin/python benchmarks/bench_shell.py kernel            # ns per DOF-step, % of triad
+    .venv/bin/python benchmarks/bench_shell.py plate             # accuracy vs CPU (+ PNG chart)
+    .venv/bin/python benchmarks/bench_shell.py paper RUN_DIR [--fins wing_1,wing_3]
+                                [--sizes 0.02,0.01,0.005] [--end-time S]
+        # RUN_DIR: a run directory with collide/ done (e.g. `flexnet run cases/radar_traction
+        # --stages deploy,collide --out RUN_DIR`); re-meshes the fins at each size and runs the
+        # shell stage on the recorded collision loads
+    .venv/bin/python benchmarks/bench_shell.py case RUN_DIR     # the stage as the case runs it
 
-Prints ratios measured side by side in this run. The machine is shared: repeat and take the
-best of several timings (done below) before trusting a ratio.
+Ratios are measured side by side in one run (the machine is shared: absolute times vary 2–3×);
+each timing is the best of several repeats.
 """
 
 from __future__ import annotations
@@ -14,27 +20,30 @@ from __future__ import annotations
 import argparse
 import json
 import logging
-import subprocess
 import sys
 import time
 from pathlib import Path
 
 import numpy as np
-from mpi4py import MPI
 from numba import njit
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 logging.getLogger("UFL").setLevel(logging.ERROR)
+logging.getLogger("FFCX").setLevel(logging.ERROR)
 logging.getLogger().setLevel(logging.WARNING)
 
-from flexnet_fe.shell.explicit import (MatFormat, central_difference, critical_step,  # noqa: E402
+from flexnet_fe.shell import api, kernel as kn, navier  # noqa: E402
+from flexnet_fe.shell.explicit import (central_difference, critical_step,  # noqa: E402
                                        max_eigenvalue, no_loads)
-from flexnet_fe.shell.forms import NDOF_NODE, ShellMaterial  # noqa: E402
-from flexnet_fe.shell.meshio import plate_mesh  # noqa: E402
-from flexnet_fe.shell.model import build_model  # noqa: E402
+from flexnet_fe.shell.forms import NDOF_NODE, ShellMaterial, Support  # noqa: E402
+from flexnet_fe.shell.mass import auto_rotary_scale  # noqa: E402
+from flexnet_fe.shell.model import ShellModel  # noqa: E402
+from flexnet_fe.shell.recovery import locate_peak, von_mises  # noqa: E402
+from flexnet_fe.shell.solve import LocalFrame, recovery_for, run, step_data  # noqa: E402
 
-MAT = ShellMaterial(thickness=6e-3, youngs_modulus=71.7e9, poisson_ratio=0.33, density=2810.0)
+AL7075 = ShellMaterial(thickness=6e-3, youngs_modulus=71.7e9, poisson_ratio=0.33, density=2810.0,
+                       yield_strength=503e6)
 
 
 @njit(cache=True)
@@ -43,8 +52,8 @@ def _triad(a, b, c, s):
         a[i] = b[i] + s * c[i]
 
 
-def stream_triad(n=20_000_000, repeat=7) -> float:
-    """Best STREAM-triad bandwidth a = b + s c [B/s], counting 3 × 8 bytes per element."""
+def stream_triad(n=20_000_000, repeat=5) -> float:
+    """Best STREAM-triad bandwidth a = b + s c [B/s] (3 × 8 bytes per element, 1 thread)."""
     a, b, c = np.zeros(n), np.ones(n), np.full(n, 2.0)
     _triad(a, b, c, 3.0)
     best = np.inf
@@ -55,203 +64,274 @@ def stream_triad(n=20_000_000, repeat=7) -> float:
     return 24.0 * n / best
 
 
-def matrix_bytes(K) -> float:
-    """Bytes the product y = K x streams per call: stored values + index data + x and y."""
-    from petsc4py import PETSc
-    info = K.getInfo(PETSc.Mat.InfoType.LOCAL)
-    nz = info["nz_used"]
-    t = K.getType()
-    n = K.getLocalSize()[0]
-    if "baij" in t:  # one column index per 5×5 block, row pointer per block row
-        idx = 4 * nz / NDOF_NODE ** 2 + 4 * n / NDOF_NODE
-    else:
-        idx = 4 * nz + 4 * n
-    return 8 * nz + idx + 2 * 8 * n
+def step_bytes(D: kn.StepData) -> float:
+    """Bytes one fused step must stream: 13 matrix values + one 4-byte index per stored block,
+    row pointers, and per DOF: u, v read and written, M⁻¹, m_t, f_ext read (y stays in cache:
+    it is touched only a few rows ahead of the sweep; m is read on sample steps only)."""
+    nnzb = len(D.K.indices)
+    n = len(D.minv)
+    return nnzb * (13 * 8 + 4) + 8 * (n // NDOF_NODE) + n * 8 * 7
 
 
-def time_steps(n_side: int, fmt: MatFormat, steps: int = 50, repeat: int = 9) -> dict:
-    """Time the central-difference loop (no external load) on an n_side² plate."""
-    comm = MPI.COMM_WORLD
-    fin = plate_mesh(n_side, n_side, 0.5, 0.5, comm=comm)
-    m = build_model(fin, MAT, "auto", fmt=fmt)
-    lam, _ = max_eigenvalue(m.op, iterations=200)
-    dtc = critical_step(lam)
-    u0 = np.zeros(m.op.n_owned)
-    u0[2::NDOF_NODE] = 1e-6 * np.sin(m.op.x_nodes[:, 0] * 20.0)
-    u0 *= m.op.minv > 0
+def time_kernel(model: ShellModel, steps: int = 40, repeat: int = 7) -> dict:
+    """Best time per step of the compiled kernel (no sampling) and of the PETSc step."""
+    op = model.op
+    lam, _ = max_eigenvalue(op)
+    dt = 0.9 * critical_step(lam)
+    lf = LocalFrame(model.fin.plane)
+    D = step_data(model, no_loads(op), lf)
+    R = recovery_for(model)._replace(e1=np.array([1.0, 0, 0]), e2=np.array([0, 1.0, 0]))
+    P = kn.StepParams(dt=dt, alpha=0.0, beta=0.0, growth_limit=1e300, sample_every=10 ** 9)
+    u0 = np.zeros(op.n_owned)
+    u0[2::NDOF_NODE] = 1e-7 * np.sin(op.x_nodes[:, 0] * 20.0)
+    St = kn.new_state(op.n_owned, u0 * (op.minv > 0))
+    H = kn.new_history(4, op.n_owned // NDOF_NODE)
+    kn.advance(D, P, R, St, H, 2)
     best = np.inf
     for _ in range(repeat):
-        comm.Barrier()
         t0 = time.perf_counter()
-        for _s in central_difference(m.op, no_loads(m.op), 0.9 * dtc, steps, steps + 1,
-                                     dt_crit=dtc, u0=u0):
-            pass
-        comm.Barrier()
-        best = min(best, time.perf_counter() - t0)
-    # the generator computes energies twice (start, end): 2 extra products, negligible at 200
-    per_step = best / steps
-    mult_bytes = comm.allreduce(matrix_bytes(m.op.K))
-    n = m.op.K.getSize()[0]
-    # f_ext zeroing (1 write) + fused update (read fe, fi, M⁻¹, v, u; write v, u: 7 sweeps)
-    vec_bytes = 8 * n * 8
-    # time of the sparse product alone
-    x, y = m.op.K.createVecs()
-    x.set(1.0)
-    tm = np.inf
+        kn.advance(D, P, R, St, H, steps)
+        best = min(best, (time.perf_counter() - t0) / steps)
+    # sampling cost: one nodal recovery
+    nodal = np.zeros((op.n_owned // NDOF_NODE, 4))
+    from flexnet_fe.shell.recovery import sample_nodes
+    sample_nodes(R, St.u, nodal)
+    ts = np.inf
     for _ in range(repeat):
-        comm.Barrier()
         t0 = time.perf_counter()
-        for _s in range(steps):
-            m.op.K.mult(x, y)
-        comm.Barrier()
-        tm = min(tm, (time.perf_counter() - t0) / steps)
-    triad = stream_triad(repeat=5) if comm.size == 1 else float("nan")
-    return {"dofs": n, "format": fmt.value, "procs": comm.size, "step_s": per_step,
-            "triad_Bps": triad,
-            "ns_per_step_per_dof": per_step / n * 1e9, "mult_s": tm,
-            "bytes_per_step": mult_bytes + vec_bytes, "mult_bytes": mult_bytes,
-            "step_bandwidth_Bps": (mult_bytes + vec_bytes) / per_step,
-            "mult_bandwidth_Bps": mult_bytes / tm}
+        sample_nodes(R, St.u, nodal)
+        ts = min(ts, time.perf_counter() - t0)
+    tp = np.inf
+    for _ in range(3):
+        t0 = time.perf_counter()
+        for _s in central_difference(op, no_loads(op), dt, 10, 11, dt_crit=dt, u0=u0):
+            pass
+        tp = min(tp, (time.perf_counter() - t0) / 10)
+    n = op.n_owned
+    return {"dofs": n, "step_s": best, "ns_per_dof_step": best / n * 1e9,
+            "bytes_per_step": step_bytes(D), "bandwidth_Bps": step_bytes(D) / best,
+            "sample_ns_per_dof": ts / n * 1e9, "petsc_step_s": tp,
+            "speedup_vs_petsc": tp / best}
 
 
-_RENDER = """
-import sys
-import numpy as np
-import pyvista as pv
-xdmf, png, title = sys.argv[1:4]
-mb = pv.XdmfReader(xdmf).read()
-names = [mb.get_block_name(k) for k in range(mb.n_blocks)]
-g = mb[names.index("peak_von_mises_pa")]
-g.cell_data["MPa"] = g.cell_data["peak_von_mises_pa"] / 1e6
-pl = pv.Plotter(off_screen=True, window_size=(900, 600))
-pl.add_mesh(g, scalars="MPa", show_edges=True, cmap="viridis")
-pl.add_text(title, font_size=10)
-pts = g.points - g.points.mean(axis=0)
-n = np.linalg.svd(pts, full_matrices=False)[2][2]  # fin normal: look at the fin face-on
-pl.view_vector(n, viewup=(1.0, 0.0, 0.0) if abs(n[0]) < 0.9 else (0.0, 1.0, 0.0))
-pl.camera.zoom(0.8)
-pl.screenshot(png)
-pl.close()
-"""
+def setup_time(n_side: int) -> dict:
+    """Wall time of everything before the first step on an n_side² plate (mesh, forms, K, M,
+    block storage, Lanczos dt_crit, recovery data, step data)."""
+    t0 = time.perf_counter()
+    m = api.plate(n_side, n_side, 0.5, 0.5, AL7075, supports={"root": Support.CLAMPED})
+    t1 = time.perf_counter()
+    lam, _ = max_eigenvalue(m.op)
+    t2 = time.perf_counter()
+    recovery_for(m)
+    step_data(m, no_loads(m.op), LocalFrame(m.fin.plane))
+    t3 = time.perf_counter()
+    return {"dofs": m.op.n_owned, "setup_s": t3 - t0, "model_s": t1 - t0, "lanczos_s": t2 - t1,
+            "kernel_data_s": t3 - t2}
 
 
-def render_envelope(xdmf: Path, png: Path, title: str) -> None:
-    """Render the peak-von-Mises envelope of a fin to ``png`` (PyVista off screen, EGL).
+def paper_fin_model(mesh_size: float) -> ShellModel:
+    """The radar missile's wing_1 (Al 7075, 6 mm) meshed at ``mesh_size`` [m], clamped root."""
+    import tempfile
+    from flexnet_fe.missile.config import MissileConfig
+    from flexnet_fe.missile.mesh import write_meshes
 
-    In a child process: rendering with VTK/EGL crashes (std::bad_alloc / segfault in
-    vtkOpenGLRenderer) in a process that imported dolfinx before VTK (measured here)."""
-    import os
-    env = {**_clean_env(), "VTK_DEFAULT_OPENGL_WINDOW": "vtkEGLRenderWindow",
-           "PYVISTA_OFF_SCREEN": "true"}
+    with tempfile.TemporaryDirectory() as td:
+        paths = write_meshes(MissileConfig(preset="radar", mesh_size=mesh_size), Path(td))
+        return api.fin(paths["wing_1"], AL7075)
+
+
+def cmd_kernel(args) -> dict:
+    bw = stream_triad()
+    print(f"STREAM triad (numba, 1 thread, 3 × 160 MB): {bw / 1e9:.2f} GB/s")
+    rows = []
+    for label, model in (("radar wing_1, 20 mm mesh", paper_fin_model(0.02)),
+                         ("radar wing_1, 10 mm mesh", paper_fin_model(0.01)),
+                         ("plate 141², 1e5 DOFs", api.plate(141, 141, 0.5, 0.5, AL7075,
+                                                            supports={"root": "clamped"}))):
+        r = time_kernel(model)
+        r["triad_Bps"] = stream_triad(repeat=3)
+        r["label"] = label
+        rows.append(r)
+        print(f"{label:26s} {r['dofs']:>7d} DOFs: {r['ns_per_dof_step']:6.2f} ns/DOF-step "
+              f"({r['step_s'] * 1e6:8.1f} µs/step), {r['bandwidth_Bps'] / 1e9:5.2f} GB/s = "
+              f"{r['bandwidth_Bps'] / r['triad_Bps']:5.1%} of the triad ({r['triad_Bps'] / 1e9:.1f}"
+              f" GB/s); one stress sample {r['sample_ns_per_dof']:.1f} ns/DOF; PETSc step "
+              f"{r['petsc_step_s'] * 1e6:.1f} µs ({r['speedup_vs_petsc']:.1f}× slower)")
+    su = setup_time(141)
+    print(f"set-up at {su['dofs']} DOFs: {su['setup_s']:.2f} s (model {su['model_s']:.2f}, "
+          f"Lanczos {su['lanczos_s']:.2f}, kernel/recovery data {su['kernel_data_s']:.2f})")
+    return {"triad_Bps": bw, "kernel": rows, "setup": su}
+
+
+def plate_case(n: int):
+    """The plate-pulse problem of tests/shell/test_plate_series.py on n × n: returns (CPU set-up
+    [s], CPU solve [s], RMS centre-deflection error, peak von Mises error, ZZ estimate)."""
+    mat = ShellMaterial(thickness=2e-3, youngs_modulus=70e9, poisson_ratio=0.3, density=2700.0)
+    a, end = 0.2, 1e-3
+    kt, kg = [0.0, 2.5e-4, 5e-4], [0.0, 1e4, 0.0]
+    s = auto_rotary_scale(a / 32, mat)
+    plate = navier.PlateData(a, a, 2e-3, 70e9, 0.3, 2700.0, rotary_scale=s)
+    c0 = time.process_time()
+    m = api.plate(n, n, a, a, mat, supports=Support.SIMPLY_SUPPORTED_HARD, rotary_scale=s)
+    loads = api.pressure(m, kt, kg)
+    lam, _ = max_eigenvalue(m.op)
+    dt = 0.9 * critical_step(lam)
+    R = recovery_for(m)
+    c1 = time.process_time()
+    centre = int(np.argmin(np.linalg.norm(m.op.x_nodes - [a / 2, a / 2, 0.0], axis=1)))
+    tw = []
+    every = max(1, round(1e-6 / dt))
+    res = run(m, loads, R, dt=dt, n_steps=int(np.ceil(end / dt)), sample_every=every,
+              frame_every=5 * every, frame=lambda t, u: tw.append((t, u[5 * centre + 2])))
+    pk = locate_peak(R, res.u_peak, res.peak_node, m.V.tabulate_dof_coordinates(),
+                     m.fin.plane.origin)
+    c2 = time.process_time()
+    t, w = np.array(tw).T
+    keep = np.concatenate([[True], np.diff(t) > 0])
+    t, w = t[keep], w[keep]
+    wr = navier.fields(plate, navier.transient_amplitudes(plate, 61, t, kt, kg),
+                       np.array([a / 2]), np.array([a / 2]))[0][:, 0]
+    g = np.linspace(0.0, a / 2, 11)
+    X, Y = (v.ravel() for v in np.meshgrid(g, g))
+    vm_ref = von_mises(navier.fields(plate, navier.transient_amplitudes(plate, 61, res.t, kt, kg),
+                                     X, Y)[1]).max()
+    return (c1 - c0, c2 - c1, float(np.sqrt(np.mean((w - wr) ** 2)) / np.abs(wr).max()),
+            float(pk.value / vm_ref - 1), float(pk.error_estimate_rel), m.op.n_owned, res.steps)
+
+
+def cmd_plate(args) -> dict:
+    rows = []
+    for n in (8, 12, 16, 24, 32, 48, 64):
+        su, so, ew, es, est, dofs, steps = plate_case(n)
+        rows.append(dict(n=n, dofs=dofs, steps=steps, cpu_setup_s=su, cpu_solve_s=so,
+                         rms_deflection_err=ew, peak_vm_err=es, zz_estimate=est))
+        print(f"{n:3d}² ({dofs:6d} DOFs, {steps:5d} steps): CPU set-up {su:5.2f} s, solve "
+              f"{so:6.2f} s; RMS deflection error {100 * ew:.3f} %, peak von Mises error "
+              f"{100 * es:+.3f} % (ZZ estimate {100 * est:.3f} %)")
+    _plate_chart(rows, ROOT / "docs" / "img" / "shell_plate_accuracy_cpu.png")
+    return {"plate": rows}
+
+
+def _plate_chart(rows, png: Path) -> None:
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    cpu = np.array([r["cpu_setup_s"] + r["cpu_solve_s"] for r in rows])
+    fig, ax = plt.subplots(figsize=(6.4, 4.2))
+    ax.loglog(cpu, [100 * r["rms_deflection_err"] for r in rows], "o-",
+              label="centre deflection, RMS over time")
+    ax.loglog(cpu, [100 * abs(r["peak_vm_err"]) for r in rows], "s-",
+              label="peak surface von Mises (recovered)")
+    ax.loglog(cpu, [100 * r["zz_estimate"] for r in rows], "s:", color="C1", alpha=0.6,
+              label="its ZZ error estimate")
+    for r, c in zip(rows, cpu):
+        ax.annotate(f"{r['n']}²", (c, 100 * r["rms_deflection_err"]), fontsize=7,
+                    textcoords="offset points", xytext=(3, -9))
+    ax.axhline(0.1, color="grey", lw=0.6, ls="--")
+    ax.set_xlabel("CPU time, set-up + solve [s]")
+    ax.set_ylabel("error vs Navier series [%]")
+    ax.set_title("SS Reissner–Mindlin plate, uniform pressure pulse", fontsize=10)
+    ax.grid(True, which="both", lw=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
     png.parent.mkdir(parents=True, exist_ok=True)
-    subprocess.run([sys.executable, "-c", _RENDER, str(xdmf), str(png), title], check=True,
-                   env=env, cwd=os.getcwd())
+    fig.savefig(png, dpi=120)
+    print(f"chart: {png}")
 
 
-def rotary_scaling_effect(mesh_size: float, picture: Path | None = None) -> dict:
-    """Peak von Mises of a radar-preset wing (6 mm Al 7075) meshed at ``mesh_size`` [m] under a
-    5 kN, 0.2 ms rope pulse normal to the fin at mid-span of the leading edge, with physical
-    rotary inertia (s = 1) and with 'auto' scaling."""
+def _run_stage(run_dir: Path, mesh_size: float, fins, out: Path, end_time=None) -> dict:
     from flexnet_fe.missile.config import MissileConfig
     from flexnet_fe.missile.geometry import build_missile
     from flexnet_fe.missile.mesh import write_meshes
     from flexnet_fe.shell.config import ShellConfig
     from flexnet_fe.shell.stage import fin_specs, run_shell
-    from flexnet_fe.io import write_history_csv
+
+    resolved = json.loads((run_dir / "resolved.json").read_text())
+    case = resolved.get("case", resolved)
+    mcfg = MissileConfig.model_validate({**case["missile"], "mesh_size": mesh_size})
+    shell = ShellConfig.model_validate({**(case.get("shell") or {}),
+                                        **({"fins": "named", "fin_names": list(fins)} if fins
+                                           else {}),
+                                        **({"end_time": end_time} if end_time else {})})
+    paths = write_meshes(mcfg, out / "meshes")
+    specs = fin_specs(build_missile(mcfg).fins, paths)
+    log = logging.getLogger("bench_shell")
+    t0 = time.perf_counter()
+    s = run_shell(shell, specs, run_dir / "collide" / "fin_contacts.npz",
+                  run_dir / "collide" / "history.csv", out / "shell", log)
+    s["bench_wall_s"] = time.perf_counter() - t0
+    return s
+
+
+def cmd_paper(args) -> dict:
+    run_dir = Path(args.run_dir)
+    sizes = [float(x) for x in args.sizes.split(",")]
+    fins = [f for f in args.fins.split(",") if f] if args.fins else None
     import tempfile
-
-    out = {}
-    with tempfile.TemporaryDirectory() as td:
-        d = Path(td)
-        cfg = MissileConfig(preset="radar", mesh_size=mesh_size)
-        paths = write_meshes(cfg, d / "meshes")
-        missile = build_missile(cfg)
-        fin = missile.fins[0]
-        spec = fin_specs([fin], paths)
-        le_mid = 0.5 * (fin.corners[1] + fin.corners[2])  # root LE → tip LE mid-point
-        t = np.linspace(0.0, 2e-4, 41)
-        amp = np.sin(np.pi * t / 2e-4)
-        rs = np.arange(len(t) + 1, dtype=np.int64)
-        force = np.outer(amp, 5e3 * fin.n)
-        np.savez(d / "fin_contacts.npz", fin_names=np.array([fin.name]), t=t, row_start=rs,
-                 fin=np.zeros(len(t), np.int32), point=np.tile(le_mid, (len(t), 1)), force=force,
-                 width=np.full(len(t), 5e-3))
-        write_history_csv(d / "history.csv", {"t_s": t, "accel_body_x_mps2": 0 * t,
-                                              "accel_body_y_mps2": 0 * t,
-                                              "accel_body_z_mps2": 0 * t})
-        log = logging.getLogger("bench")
-        for scale in (1.0, "auto"):
-            sc = ShellConfig(rotary_inertia_scale=scale, end_time=1e-3, history_interval=2e-6,
-                             field_interval=5e-4)
-            t0 = time.perf_counter()
-            s = run_shell(sc, spec, d / "fin_contacts.npz", d / "history.csv",
-                          d / f"out_{scale}", log)
-            r = s[fin.name]
-            if picture is not None and scale == "auto":
-                render_envelope(d / f"out_{scale}" / fin.name / "envelope.xdmf", picture,
-                                f"{fin.name}: peak von Mises over time [MPa], body frame B")
-            out[str(scale)] = {"peak_von_mises_pa": r["peak_von_mises_pa"],
-                               "peak_time_s": r["peak_time_s"], "dt_s": r["dt_s"],
-                               "steps": r["steps"], "rotary_scale": r["rotary_inertia_scale"],
-                               "wall_s": time.perf_counter() - t0, "dofs": r["dofs"]}
-    return out
+    rows = []
+    for h in sizes:
+        with tempfile.TemporaryDirectory() as td:
+            s = _run_stage(run_dir, h, fins, Path(td), args.end_time)
+        for name, r in s.items():
+            if isinstance(r, dict) and "peak_von_mises_pa" in r:
+                rows.append(dict(mesh_size=h, fin=name, peak=r["peak_von_mises_pa"],
+                                 t=r["peak_time_s"], loc=r["peak_location_m"],
+                                 est=r["peak_error_estimate_rel"], dofs=r["dofs"],
+                                 steps=r["steps"]))
+                print(f"h = {1e3 * h:5.2f} mm {name:9s} {r['dofs']:7d} DOFs {r['steps']:7d} steps:"
+                      f" peak {r['peak_von_mises_pa'] / 1e6:9.2f} MPa at "
+                      f"{1e3 * r['peak_time_s']:.4f} ms, ZZ estimate "
+                      f"{100 * r['peak_error_estimate_rel']:.2f} %", flush=True)
+        print(f"h = {1e3 * h:5.2f} mm: stage wall {s['bench_wall_s']:.1f} s", flush=True)
+    for name in sorted({r["fin"] for r in rows}):
+        pk = [(r["mesh_size"], r["peak"]) for r in rows if r["fin"] == name]
+        if len(pk) >= 3:
+            (h1, s1), (h2, s2), (h3, s3) = pk[-3:]
+            if (s2 - s1) * (s3 - s2) > 0 and abs(s3 - s2) < abs(s2 - s1):
+                p = np.log(abs((s2 - s1) / (s3 - s2))) / np.log(h1 / h2)
+                ext = s3 + (s3 - s2) / ((h2 / h3) ** p - 1)
+                print(f"{name}: observed order {p:.2f}, Richardson limit {ext / 1e6:.2f} MPa, "
+                      f"finest mesh {100 * (s3 / ext - 1):+.2f} %")
+            else:
+                print(f"{name}: peaks {[f'{v / 1e6:.1f}' for _, v in pk]} MPa — not monotone, "
+                      f"no order")
+    return {"paper": rows}
 
 
-def _clean_env() -> dict:
-    """This process's environment without the singleton-MPI variables, for a child mpirun."""
-    import os
-    return {k: v for k, v in os.environ.items() if not k.startswith(("OMPI_", "PMIX_", "PRTE_"))}
+def cmd_case(args) -> dict:
+    import tempfile
+    run_dir = Path(args.run_dir)
+    resolved = json.loads((run_dir / "resolved.json").read_text())
+    case = resolved.get("case", resolved)
+    h = case["missile"].get("mesh_size", 0.02)
+    walls = []
+    for _ in range(2):  # first run warms the caches
+        with tempfile.TemporaryDirectory() as td:
+            s = _run_stage(run_dir, h, None, Path(td))
+        walls.append(s["bench_wall_s"])
+    print(f"shell stage at the case's mesh ({1e3 * h:.1f} mm): {walls[-1]:.2f} s warm "
+          f"(cold {walls[0]:.2f} s), {s['dofs']} DOFs, {s['steps']} steps")
+    return {"case": {"mesh_size": h, "wall_warm_s": walls[-1], "wall_cold_s": walls[0],
+                     "dofs": s["dofs"], "steps": s["steps"]}}
 
 
 def main() -> None:
     ap = argparse.ArgumentParser()
-    ap.add_argument("--quick", action="store_true")
-    ap.add_argument("--mpi-child", action="store_true", help=argparse.SUPPRESS)
+    sub = ap.add_subparsers(dest="cmd", required=True)
+    sub.add_parser("kernel")
+    sub.add_parser("plate")
+    p = sub.add_parser("paper")
+    p.add_argument("run_dir")
+    p.add_argument("--fins", default="")
+    p.add_argument("--sizes", default="0.02,0.01,0.005")
+    p.add_argument("--end-time", type=float, default=None)
+    c = sub.add_parser("case")
+    c.add_argument("run_dir")
     args = ap.parse_args()
-    comm = MPI.COMM_WORLD
-    sides = (44,) if args.quick else (44, 141)  # (n+1)² × 5 ≈ 1.0e4, 1.0e5 DOFs
-    if args.mpi_child:
-        res = [time_steps(n, MatFormat.SBAIJ) for n in sides]
-        if comm.rank == 0:
-            print(json.dumps(res))
-        return
-    bw = stream_triad()
-    print(f"STREAM triad (numba, 1 thread, 3 × 160 MB arrays): {bw / 1e9:.2f} GB/s; "
-          "each row below is compared with a triad re-measured right after it")
-    rows = []
-    for n in sides:
-        for fmt in (MatFormat.AIJ, MatFormat.BAIJ, MatFormat.SBAIJ):
-            r = time_steps(n, fmt)
-            rows.append(r)
-            print(f"{r['dofs']:>7d} DOFs {fmt.value:>5s} 1 proc: step {r['step_s'] * 1e6:8.1f} µs "
-                  f"= {r['ns_per_step_per_dof']:6.2f} ns/DOF; product {r['mult_s'] * 1e6:8.1f} µs; "
-                  f"step bandwidth {r['step_bandwidth_Bps'] / 1e9:5.2f} GB/s = "
-                  f"{r['step_bandwidth_Bps'] / r['triad_Bps']:5.1%} of triad "
-                  f"({r['triad_Bps'] / 1e9:.1f} GB/s); product alone "
-                  f"{r['mult_bandwidth_Bps'] / r['triad_Bps']:5.1%}")
-    mpi = subprocess.run(["mpirun", "--oversubscribe", "--allow-run-as-root", "-n", "2",
-                          sys.executable, __file__, "--mpi-child"] + (["--quick"] if args.quick else []),
-                         capture_output=True, text=True, env=_clean_env())
-    if mpi.returncode != 0:
-        print("mpirun failed:", mpi.stdout[-1500:], mpi.stderr[-1500:])
-    par = json.loads(mpi.stdout.strip().splitlines()[-1]) if mpi.returncode == 0 else []
-    for r in par:
-        ser = next(x for x in rows if x["dofs"] == r["dofs"] and x["format"] == "sbaij")
-        print(f"{r['dofs']:>7d} DOFs sbaij 2 procs: step {r['step_s'] * 1e6:8.1f} µs, "
-              f"speed-up vs 1 proc {ser['step_s'] / r['step_s']:.2f}×")
-    pic = ROOT / "docs" / "img" / "shell_wing_envelope.png"
-    rot = {} if args.quick else {h: rotary_scaling_effect(h, pic if h == 0.02 else None)
-                                 for h in (0.02, 0.05)}
-    for h, res in rot.items():
-        for k, v in res.items():
-            print(f"wing mesh {h * 1e3:.0f} mm, rotary inertia {k:>4s} (s = {v['rotary_scale']:.3g}): "
-                  f"{v['dofs']} DOFs, dt = {v['dt_s']:.3e} s, {v['steps']} steps, peak von Mises "
-                  f"{v['peak_von_mises_pa'] / 1e6:.2f} MPa at {v['peak_time_s'] * 1e3:.4f} ms, "
-                  f"wall {v['wall_s']:.1f} s")
-        a, b = res["1.0"], res["auto"]
-        print(f"  auto/physical: peak ratio {b['peak_von_mises_pa'] / a['peak_von_mises_pa']:.4f}, "
-              f"dt ratio {b['dt_s'] / a['dt_s']:.2f}, wall ratio {b['wall_s'] / a['wall_s']:.2f}")
-    print(json.dumps({"stream_Bps": bw, "serial": rows, "mpi2": par, "rotary": rot}, default=float))
+    out = {"kernel": cmd_kernel, "plate": cmd_plate, "paper": cmd_paper, "case": cmd_case}[
+        args.cmd](args)
+    print(json.dumps(out, default=float))
 
 
 if __name__ == "__main__":

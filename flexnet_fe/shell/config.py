@@ -14,6 +14,7 @@ from typing import Literal
 from pydantic import Field, model_validator
 
 from flexnet_fe.schema import NonNegative, Positive, Section
+from flexnet_fe.shell.supports import Support
 
 
 class FinSelection(str, Enum):
@@ -25,6 +26,25 @@ class FinSelection(str, Enum):
     """only fins that received at least one contact event in the collision stage"""
     NAMED = "named"
     """the fins listed in ``shell.fin_names``"""
+
+
+class PressureLoad(Section):
+    """``[shell.load]``: a uniform pressure history on every solved fin, instead of the
+    collision loads (for checking the solver on a fin of one's own; a plate: see
+    :mod:`flexnet_fe.shell.api`)."""
+
+    times: tuple[float, ...] = Field(description="sample times, increasing [s]")
+    pressure: tuple[float, ...] = Field(
+        description="pressure along the fin normal n at the sample times, linear in between, "
+                    "zero outside [Pa]")
+
+    @model_validator(mode="after")
+    def _check(self) -> "PressureLoad":
+        if len(self.times) < 2 or len(self.times) != len(self.pressure):
+            raise ValueError("times and pressure need the same length (>= 2)")
+        if any(b <= a for a, b in zip(self.times, self.times[1:])):
+            raise ValueError("times must increase")
+        return self
 
 
 class ShellConfig(Section):
@@ -40,20 +60,35 @@ class ShellConfig(Section):
     shear_correction: Positive = Field(5.0 / 6.0, description="transverse shear factor κ [-]")
     rayleigh_alpha: NonNegative = Field(0.0, description="mass-proportional damping α [1/s]")
     rayleigh_beta: NonNegative = Field(0.0, description="stiffness-proportional damping β [s]")
-    history_interval: Positive | None = Field(
-        None, description="time between stress samples (history.csv rows, envelope) [s]; "
-                          "default: end_time / 400")
+    history_interval: Positive = Field(
+        2e-6, description="time between stress samples (history.csv rows, envelope, peak "
+                          "search) [s]; rounded to a whole number of steps (at least 1)")
     field_interval: Positive | None = Field(
-        None, description="time between XDMF field outputs [s]; default: end_time / 40")
+        None, description="time between XDMF field outputs [s]; default: end_time / 10 (plus a "
+                          "frame at each fin's peak instant)")
     fins: FinSelection = Field(FinSelection.LOADED, description="all | loaded | named")
+    supports: dict[Literal["root", "leading_edge", "tip", "trailing_edge"], Support] = Field(
+        default_factory=lambda: {"root": Support.CLAMPED},
+        description="edge supports: clamped | simply_supported (w = 0 only) | "
+                    "simply_supported_hard | pinned | free; edges not listed are free")
+    load: PressureLoad | None = Field(
+        None, description="[shell.load]: a pressure history on every solved fin that replaces "
+                          "the collision loads (contacts and body acceleration)")
     fin_names: tuple[str, ...] = Field((), description="fins to solve when fins = 'named'")
     end_time: Positive | None = Field(
         None, description="simulated time [s]; default: last contact sample time + end_margin")
     end_margin: NonNegative = Field(
         2e-3, description="time simulated after the last collision sample when end_time is not "
                           "given [s]")
-    power_iterations: int = Field(
-        1000, ge=20, description="iterations of the power method for λ_max(M⁻¹K) [-]")
+    lanczos_steps: int = Field(
+        40, ge=5, le=400, description="Lanczos steps for λ_max(M⁻¹K), hence dt_crit [-]")
+    backend: Literal["auto", "compiled", "petsc"] = Field(
+        "auto", description="explicit step: 'compiled' (numba kernel, one process), 'petsc' "
+                            "(Mat.mult per step, any number of MPI processes) or 'auto' "
+                            "(compiled on one process, petsc under MPI)")
+    peak_error_tolerance: Positive = Field(
+        0.02, description="a fin's peak von Mises whose estimated relative error exceeds this "
+                          "adds a line to summary.shell.warnings [-]")
     energy_growth_limit: Positive = Field(
         10.0, gt=1.0,
         description="stop as unstable when kinetic + strain energy exceeds this factor times "

@@ -38,7 +38,6 @@ bending on coarse meshes (parasitic shear of Q4) — in-plane bending is not the
 from __future__ import annotations
 
 from dataclasses import dataclass
-from enum import Enum
 
 import numpy as np
 import ufl
@@ -46,6 +45,7 @@ from dolfinx import fem
 from petsc4py import PETSc
 
 from flexnet_fe.shell.meshio import FinPlane
+from flexnet_fe.shell.supports import _SUPPORT_COMPONENTS, NORMAL_FIXED, Support  # noqa: F401
 
 NDOF_NODE = 5
 """DOFs per node: u_x, u_y, u_z [m] (frame B), θ_1, θ_2 [rad] (fin basis e1, e2)."""
@@ -240,22 +240,35 @@ def stiffness_forms(V: fem.FunctionSpace, plane: FinPlane, mat: ShellMaterial) -
             ks * Gi[0, 1] * (gUc[0] * gWc[1] + gUc[1] * gWc[0]) * dx_c]
 
 
-class Support(str, Enum):
-    """Edge support: which of the 5 nodal DOFs are fixed."""
-
-    CLAMPED = "clamped"
-    """u and θ fixed (the fin root on the missile body)"""
-    PINNED = "pinned"
-    """u fixed, θ free (soft simple support)"""
-
-
-_SUPPORT_COMPONENTS = {Support.CLAMPED: (0, 1, 2, 3, 4), Support.PINNED: (0, 1, 2)}
-
-
-def edge_dofs(V: fem.FunctionSpace, facet_tags, tag: int, support: Support) -> np.ndarray:
-    """Local unrolled DOF indices (block size 5) fixed by ``support`` on the tagged edge."""
+def edge_blocks(V: fem.FunctionSpace, facet_tags, tag: int) -> np.ndarray:
+    """Local node (block) indices on the tagged edge."""
     fdim = V.mesh.topology.dim - 1
     V.mesh.topology.create_connectivity(fdim, 0)
-    blocks = fem.locate_dofs_topological(V, fdim, facet_tags.find(tag))
-    comps = np.array(_SUPPORT_COMPONENTS[Support(support)])
+    return fem.locate_dofs_topological(V, fdim, facet_tags.find(tag))
+
+
+def _tangential_rotation(V, blocks: np.ndarray, plane: FinPlane) -> int:
+    """Which rotation component (3 = θ1, 4 = θ2) is the tilt along an edge through the nodes
+    ``blocks``: θ1 for an edge along e1, θ2 along e2; ValueError otherwise."""
+    x = V.tabulate_dof_coordinates()[blocks]
+    pts = np.concatenate(V.mesh.comm.allgather(x))
+    if len(pts) < 2:
+        raise ValueError("edge has fewer than 2 nodes")
+    d = pts.max(axis=0) - pts.min(axis=0)
+    s = np.abs([d @ plane.e1, d @ plane.e2])
+    if min(s) > 1e-9 * max(s):
+        raise ValueError("simply_supported_hard needs an edge along e1 or e2 of the fin basis")
+    return 3 if s[0] > s[1] else 4
+
+
+def edge_dofs(V: fem.FunctionSpace, facet_tags, tag: int, support: Support,
+              plane: FinPlane | None = None) -> np.ndarray:
+    """Local unrolled DOF indices (block size 5) fixed by ``support`` on the tagged edge
+    (the w = 0 constraint of the simple supports is not a DOF: see :data:`NORMAL_FIXED`)."""
+    support = Support(support)
+    blocks = edge_blocks(V, facet_tags, tag)
+    comps = list(_SUPPORT_COMPONENTS[support])
+    if support is Support.SIMPLY_SUPPORTED_HARD:
+        comps.append(_tangential_rotation(V, blocks, plane))
+    comps = np.array(comps, dtype=np.int64)
     return (blocks[:, None] * NDOF_NODE + comps[None, :]).ravel().astype(np.int64)

@@ -23,8 +23,10 @@ def lumped_mass(V: fem.FunctionSpace, mat: ShellMaterial, rotary_scale: float) -
     """
     if rotary_scale < 1.0:
         raise ValueError(f"rotary_scale must be >= 1, got {rotary_scale}")
-    rt = mat.density * mat.thickness
-    ri = rotary_scale * mat.density * mat.thickness ** 3 / 12.0
+    mesh = V.mesh
+    # fem.Constant, not literals: one compiled form serves every mesh, material and scale
+    rt = fem.Constant(mesh, PETSc.ScalarType(mat.density * mat.thickness))
+    ri = fem.Constant(mesh, PETSc.ScalarType(rotary_scale * mat.density * mat.thickness ** 3 / 12.0))
     c = ufl.as_vector([rt, rt, rt, ri, ri])
     W = ufl.TestFunction(V)
     m = assemble_vector(fem.form(ufl.inner(c, W) * ufl.dx(metadata={"quadrature_degree": 2})))

@@ -7,8 +7,9 @@ from dataclasses import dataclass
 import numpy as np
 from dolfinx import fem
 
-from flexnet_fe.shell.explicit import MatFormat, ShellOperator, assemble_operator
-from flexnet_fe.shell.forms import ShellMaterial, Support, edge_dofs, shell_space, stiffness_forms
+from flexnet_fe.shell.explicit import ShellOperator, assemble_operator
+from flexnet_fe.shell.forms import (NORMAL_FIXED, ShellMaterial, Support, edge_blocks, edge_dofs,
+                                   shell_space, stiffness_forms)
 from flexnet_fe.shell.mass import auto_rotary_scale, lumped_mass, min_edge_length
 from flexnet_fe.shell.meshio import FinMesh
 
@@ -27,8 +28,7 @@ class ShellModel:
 
 
 def build_model(fin: FinMesh, material: ShellMaterial, rotary_scale: float | str = "auto", *,
-                supports: dict[str, Support] | None = None,
-                fmt: MatFormat = MatFormat.SBAIJ) -> ShellModel:
+                supports: dict[str, Support] | None = None) -> ShellModel:
     """Assemble K (once) and the lumped mass of a fin. ``supports``: edge group → support
     (default: the ``root`` clamped to the missile body). ``rotary_scale``: a factor >= 1 or
     ``"auto"`` (:func:`~flexnet_fe.shell.mass.auto_rotary_scale`)."""
@@ -44,8 +44,14 @@ def build_model(fin: FinMesh, material: ShellMaterial, rotary_scale: float | str
     unknown = [g for g in supports if g not in fin.edge_tags]
     if unknown:
         raise ValueError(f"fin mesh has no edge group(s) {unknown}; has {sorted(fin.edge_tags)}")
-    fixed = [edge_dofs(V, fin.facet_tags, fin.edge_tags[g], sup) for g, sup in supports.items()]
+    supports = {g: Support(sup) for g, sup in supports.items()}
+    fixed = [edge_dofs(V, fin.facet_tags, fin.edge_tags[g], sup, fin.plane)
+             for g, sup in supports.items()]
     cl = np.unique(np.concatenate(fixed)) if fixed else np.zeros(0, dtype=np.int64)
+    wfix = [edge_blocks(V, fin.facet_tags, fin.edge_tags[g]) for g, sup in supports.items()
+            if sup in NORMAL_FIXED]
+    wfix = np.unique(np.concatenate(wfix)) if wfix else np.zeros(0, dtype=np.int64)
     m = lumped_mass(V, material, s)
-    op = assemble_operator(stiffness_forms(V, fin.plane, material), V, m, cl, fmt)
+    op = assemble_operator(stiffness_forms(V, fin.plane, material), V, m, cl,
+                           normal_fixed=wfix, normal=fin.plane.n)
     return ShellModel(fin=fin, V=V, material=material, rotary_scale=s, h_min=h, op=op)

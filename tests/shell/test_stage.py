@@ -18,7 +18,7 @@ from flexnet_fe.shell import stage as stage_mod
 from flexnet_fe.shell.config import FinSpec, ShellConfig
 from flexnet_fe.shell.meshio import write_plate_msh
 from flexnet_fe.shell.stage import run_shell
-from flexnet_fe.shell.stress import FIELD_NAMES
+from flexnet_fe.shell.stage import CELL_NAMES, NODAL_NAMES
 
 ROOT = Path(__file__).resolve().parents[2]
 PY = ROOT / ".venv" / "bin" / "python"
@@ -69,24 +69,34 @@ def test_stage_outputs(tmp_path):
     assert 0 < s["dt_s"] <= 0.9 * s["dt_crit_s"] * (1 + 1e-12)
     h = read_history_csv(out / "wing" / "history.csv")
     assert h["t_s"][-1] == pytest.approx(2e-3, abs=s["dt_s"])
-    # the summary's peak is the history's maximum (same samples)
+    # the summary's peak is the history's maximum (same samples); the peak row carries the
+    # located value (the recovered field's maximum in the cells around the peak node, so at
+    # least the nodal value) and its location, within a cell diagonal of the node
     i = int(np.argmax(h["max_von_mises_pa"]))
     assert w["peak_von_mises_pa"] == h["max_von_mises_pa"][i]
     assert w["peak_time_s"] == h["t_s"][i]
-    np.testing.assert_allclose(w["peak_location_m"],
-                               [h[f"max_von_mises_{c}_m"][i] for c in "xyz"])
+    assert w["peak_von_mises_pa"] >= w["peak_nodal_von_mises_pa"] * (1 - 1e-12)
+    np.testing.assert_allclose(w["peak_location_m"], [h[f"max_von_mises_{c}_m"][i] for c in "xyz"])
     assert 1e6 < w["peak_von_mises_pa"] < 1e10 and w["peak_max_principal_pa"] > 0
+    assert w["allowable_pa"] == 503e6 and 0 < w["peak_error_estimate_rel"] < 1
+    assert isinstance(s["warnings"], list)
     os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
     os.environ.setdefault("PYVISTA_OFF_SCREEN", "true")
     pv = pytest.importorskip("pyvista")
     r = pv.XdmfReader(str(out / "wing" / "fields.xdmf"))
-    assert r.number_time_points == 9  # t = 0, 0.25 ms, ..., 2 ms
+    # t = 0, 0.25 ms, ..., 2 ms (field_interval), plus the running peak's instants (at most one
+    # per interval), one of which is the final peak time
+    times = np.asarray(r.time_values)
+    assert 9 <= len(times) <= 17 and np.all(np.diff(times) > 0)
+    assert np.min(np.abs(times - w["peak_time_s"])) < 1e-6 * w["peak_time_s"]
     r.set_active_time_value(r.time_values[-1])
     blocks = r.read()
     names = [blocks.get_block_name(k) for k in range(blocks.n_blocks)]
-    assert set(FIELD_NAMES) | {"displacement_m"} <= set(names)
-    vm = blocks[names.index("von_mises_top_pa")].cell_data["von_mises_top_pa"]
-    assert vm.shape == (72,) and np.all(np.isfinite(vm))
+    assert set(NODAL_NAMES) | set(CELL_NAMES) | {"displacement_m"} <= set(names)
+    vm = blocks[names.index(NODAL_NAMES[0])].point_data[NODAL_NAMES[0]]
+    assert vm.shape == (13 * 7,) and np.all(np.isfinite(vm))
+    cm = blocks[names.index("von_mises_top_pa")].cell_data["von_mises_top_pa"]
+    assert cm.shape == (72,) and np.all(np.isfinite(cm))
     env = pv.XdmfReader(str(out / "wing" / "envelope.xdmf")).read()
     en = [env.get_block_name(k) for k in range(env.n_blocks)]
     peak_env = env[en.index("peak_von_mises_pa")].cell_data["peak_von_mises_pa"].max()
@@ -134,10 +144,11 @@ def test_two_processes_give_the_same_history(tmp_path):
     a = read_history_csv(tmp_path / "serial" / "wing" / "history.csv")
     b = read_history_csv(tmp_path / "parallel" / "wing" / "history.csv")
     for k in a:
-        # Reference: the serial run. Only the summation order of the sparse products and
-        # reductions differs, so histories agree to round-off; the issue's bound is 1e-8.
+        # Reference: the serial run (compiled kernel). The 2-process run steps with PETSc
+        # (Mat.mult per step) and completes the stress recovery by a reverse scatter: only the
+        # summation order differs, so histories agree to round-off; bound 1e-10 (issue 10).
         scale = np.nanmax(np.abs(a[k])) or 1.0
-        np.testing.assert_allclose(b[k], a[k], rtol=0, atol=1e-8 * scale, err_msg=k)
+        np.testing.assert_allclose(b[k], a[k], rtol=0, atol=1e-10 * scale, err_msg=k)
 
 
 def test_runs_on_the_missile_meshers_fin(tmp_path):
@@ -166,3 +177,27 @@ def test_runs_on_the_missile_meshers_fin(tmp_path):
     uv = np.array([(p - fin.origin) @ fin.e1, (p - fin.origin) @ fin.e2])
     lo, hi = fin.uv.min(axis=0), fin.uv.max(axis=0)
     assert np.all(uv >= lo - 1e-9) and np.all(uv <= hi + 1e-9)  # inside the fin's bounding box
+
+
+def test_shell_load_option_runs_a_pressure_history_on_a_fin(tmp_path):
+    """[shell.load] + [shell.supports] (no collision stage needed): the stage gives the same
+    peak as the API on the same mesh and supports (wiring), and a bad support name is a one-line
+    config error naming the field."""
+    from pydantic import ValidationError
+    from flexnet_fe.shell import api
+    from flexnet_fe.shell.forms import ShellMaterial
+
+    write_plate_msh(tmp_path / "plate.msh", 12, 12, 0.2, 0.2)
+    spec = FinSpec("plate", tmp_path / "plate.msh", 2e-3, 70e9, 0.3, 2700.0, 300e6)
+    sup = {g: "simply_supported_hard" for g in ("root", "tip", "leading_edge", "trailing_edge")}
+    load = {"times": [0.0, 2.5e-4, 5e-4], "pressure": [0.0, 1e4, 0.0]}
+    cfg = ShellConfig(supports=sup, load=load, end_time=6e-4, history_interval=1e-9,
+                      rotary_inertia_scale=4.0)
+    s = run_shell(cfg, [spec], tmp_path / "none.npz", None, tmp_path / "out", _log())
+    mat = ShellMaterial(thickness=2e-3, youngs_modulus=70e9, poisson_ratio=0.3, density=2700.0)
+    m = api.plate(12, 12, 0.2, 0.2, mat, supports="simply_supported_hard", rotary_scale=4.0)
+    ref = api.solve(m, api.pressure(m, load["times"], load["pressure"]), 6e-4)
+    assert s["plate"]["peak_von_mises_pa"] == pytest.approx(ref.peak.value, rel=1e-9)
+    assert s["plate"]["peak_time_s"] == pytest.approx(ref.run.peak_t, rel=1e-12)
+    with pytest.raises(ValidationError, match="supports"):
+        ShellConfig(supports={"root": "glued"})

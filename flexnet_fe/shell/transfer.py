@@ -1,4 +1,4 @@
-"""Contact loads → consistent nodal forces on a fin's shell mesh (issue 4, used by the shell stage).
+"""Contact loads → consistent nodal forces on a fin's shell mesh (the shell stage's load transfer).
 
 A rope of diameter ``width`` pressing on a fin loads an area of that size, not a point. Each
 contact force F acting at point p is spread uniformly over a stencil of radius w/2 around p in
@@ -10,9 +10,10 @@ symmetric about p). Spreading over the rope width keeps the peak stress finite a
 refined (a true point force gives a logarithmically unbounded bending stress).
 
 Stencil choice (departure from the paper, which does not describe its load transfer):
-1. a disk of radius w/2 (3 equal-area rings × 8 points) when all its points lie on the fin;
+1. a disk of radius w/2 (equal-area rings, points ≤ ~h/2 apart: :func:`stencil_resolution`)
+   when all its points lie on the fin;
 2. else (contact at or near an edge) a segment of length w through p parallel to the nearest fin
-   edge — a rope across an edge touches it over about its width;
+   edge (Gauss points ≤ ~h/2 apart) — a rope across an edge touches it over about its width;
 3. else (a corner) that segment halved until it fits; a point load at p as the last resort.
 The component of p normal to the plane is dropped (mid-surface loading). A point outside the
 planform by at most ``plane_tol`` (a rope on the edge face, round-off) is moved to the nearest
@@ -21,6 +22,7 @@ edge point (moment change ≤ plane_tol·|F|); farther from the plane or the fin
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -30,16 +32,26 @@ from mpi4py import MPI
 from scipy import sparse
 
 from flexnet_fe.shell.forms import NDOF_NODE  # (u_x, u_y, u_z, θ_1, θ_2); forces load the first 3
+from flexnet_fe.shell.mass import min_edge_length
 
 
-_NR, _NPHI = 3, 8
-_RING_R = np.sqrt((np.arange(_NR) + 0.5) / _NR)  # equal-area ring radii (unit disk)
-_PHI = 2.0 * np.pi * (np.arange(_NPHI) + 0.5) / _NPHI
-DISK = np.concatenate([np.column_stack([r * np.cos(_PHI), r * np.sin(_PHI)]) for r in _RING_R])
-"""unit-disk stencil, shape (24, 2), equal weights, centroid 0"""
-_GL = np.polynomial.legendre.leggauss(6)
-LINE = _GL[0]
-"""unit segment [-1, 1] stencil (6 Gauss points), weights ``_GL[1] / 2``"""
+def disk_stencil(n_rings: int, n_phi: int) -> np.ndarray:
+    """Unit-disk stencil: n_rings equal-area rings × n_phi points, equal weights, centroid 0
+    (n_phi a multiple of 8: symmetric), shape (n_rings·n_phi, 2)."""
+    rr = np.sqrt((np.arange(n_rings) + 0.5) / n_rings)
+    phi = 2.0 * np.pi * (np.arange(n_phi) + 0.5) / n_phi
+    return np.concatenate([np.column_stack([r * np.cos(phi), r * np.sin(phi)]) for r in rr])
+
+
+def stencil_resolution(radius: float, h: float) -> tuple[int, int, int]:
+    """(rings, points per ring, line points) so that stencil points are at most ~h/2 apart
+    (at least 3 × 8 and 6): finer than the mesh, a stencil acts as the distributed load it
+    stands for; coarser (a fixed 24 points), it would act as a cluster of point loads once the
+    mesh is refined below the rope width, and the peak would diverge again."""
+    rings = max(3, math.ceil(2.0 * radius / h))
+    phi = 8 * max(1, math.ceil(math.pi * radius / (2.0 * h)))
+    line = max(6, math.ceil(4.0 * radius / h))
+    return rings, phi, line
 
 
 @dataclass(frozen=True)
@@ -193,6 +205,11 @@ def contact_transfer(fg: FinGeometry, points: np.ndarray, widths: np.ndarray, *,
         p2[out] = near
 
     # 1. disk stencils
+    h = min_edge_length(fg.mesh)
+    n_rings, n_phi, n_line = stencil_resolution(float(r.max(initial=0.0)), h)
+    DISK = disk_stencil(n_rings, n_phi)
+    GL = np.polynomial.legendre.leggauss(n_line)
+    LINE = GL[0]
     nd = len(DISK)
     pts = (p2[:, None, :] + r[:, None, None] * DISK[None]).reshape(-1, 2)
     cell, X, mine, found = _locate(fg, to3(pts))
@@ -213,7 +230,7 @@ def contact_transfer(fg: FinGeometry, points: np.ndarray, widths: np.ndarray, *,
             c, Xl, mi, fo = _locate(fg, to3(pts.reshape(-1, 2)))
             ok = fo.reshape(-1, nl).all(axis=1)
             ev_idx.append(np.repeat(todo, nl))
-            wts.append(np.tile(_GL[1] / 2.0, len(todo)))
+            wts.append(np.tile(GL[1] / 2.0, len(todo)))
             keep.append(np.repeat(ok, nl) & mi)
             cells.append(c)
             Xs.append(Xl)
@@ -268,3 +285,23 @@ def _owned_rows(V, G: sparse.csr_matrix, comm) -> sparse.csr_matrix:
     cc = np.concatenate([x[1] for x in recv]).astype(np.int64)
     vv = np.concatenate([x[2] for x in recv])
     return (own + sparse.csr_matrix((vv, (rr, cc)), shape=own.shape)).tocsr()
+
+
+def locate_in_cells(fg: FinGeometry, points: np.ndarray, weights: np.ndarray,
+                    direction: np.ndarray) -> np.ndarray:
+    """Consistent nodal forces of the owned DOFs (n_owned·5,) [N] of point forces
+    ``weights[q] · direction`` [N] at in-plane points ``points`` (m, 3) [m]: f_i = Σ_q w_q N_i(x_q)
+    (a quadrature of a distributed load). Raises ValueError for a point outside the fin."""
+    cell, X, mine, found = _locate(fg, np.asarray(points, dtype=float))
+    if not found.all():
+        k = int(np.flatnonzero(~found)[0])
+        raise ValueError(f"load point {points[k]} m lies outside the fin")
+    cl, Xa, w = cell[mine], X[mine], np.asarray(weights, dtype=float)[mine]
+    N = _shape_q1(Xa[:, 0], Xa[:, 1])
+    V = fg.V
+    blocks = V.dofmap.list.array.reshape(-1, 4)[cl]
+    rows = (blocks[:, :, None] * NDOF_NODE + np.arange(3)[None, None, :]).ravel()
+    vals = ((w[:, None] * N)[:, :, None] * np.asarray(direction, float)[None, None, :]).ravel()
+    n_loc = (V.dofmap.index_map.size_local + V.dofmap.index_map.num_ghosts) * NDOF_NODE
+    G = sparse.csr_matrix((vals, (rows, np.zeros_like(rows))), shape=(n_loc, 1))
+    return np.asarray(_owned_rows(V, G, fg.mesh.comm).todense()).ravel()

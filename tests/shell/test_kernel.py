@@ -1,0 +1,65 @@
+"""The compiled step kernel against the PETSc step (same scheme, different code and storage)."""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import sparse
+
+from flexnet_fe.shell import api
+from flexnet_fe.shell.explicit import (Backend, LoadHistory, critical_step, max_eigenvalue,
+                                       translational_mass)
+from flexnet_fe.shell.forms import NDOF_NODE, ShellMaterial, Support
+from flexnet_fe.shell.solve import recovery_for, run
+
+from .conftest import A1, A2, ORIGIN
+
+MAT = ShellMaterial(thickness=3e-3, youngs_modulus=70e9, poisson_ratio=0.3, density=2700.0)
+
+
+def _loads(m):
+    """A moving sparse load, a uniform pressure ramp and a body acceleration, all at once."""
+    n = m.op.n_owned
+    t = np.linspace(0.0, 4e-4, 9)
+    P = np.zeros((n, len(t)))
+    rng = np.random.default_rng(4)
+    for k in range(len(t)):
+        nodes = rng.choice(n // NDOF_NODE, 3, replace=False)
+        for i in nodes:
+            P[NDOF_NODE * i: NDOF_NODE * i + 3, k] = rng.normal(size=3) * 50.0
+    P += api.pressure(m, t, 2e3 * t / t[-1]).nodal.toarray()
+    acc = np.array([[0.0, 0.0, 0.0], [3e3, -1e3, 2e3], [0.0, 5e2, 0.0]])
+    return LoadHistory(times=t, nodal=sparse.csc_matrix(P), accel_times=np.array([0, 2e-4, 4e-4]),
+                       accel=acc, mass_c=translational_mass(m.op))
+
+
+def test_compiled_step_equals_petsc_step_over_1000_steps():
+    sup = {"root": Support.CLAMPED, "tip": Support.SIMPLY_SUPPORTED}
+    m = api.plate(10, 6, 0.3, 0.15, MAT, supports=sup, origin=ORIGIN, a1=A1, a2=A2)
+    loads = _loads(m)
+    lam, _ = max_eigenvalue(m.op)
+    dt = 0.9 * critical_step(lam, 50.0, 1e-7)
+    R = recovery_for(m)
+    out = {}
+    for be in (Backend.COMPILED, Backend.PETSC):
+        out[be] = run(m, loads, R, dt=dt, n_steps=1000, sample_every=10, frame_every=100,
+                      alpha=50.0, beta=1e-7, backend=be)
+    a, b = out[Backend.COMPILED], out[Backend.PETSC]
+    # Reference: the PETSc backend (Mat.mult on the AIJ matrix in frame B, Python update). The
+    # compiled kernel works on the block-upper, membrane/bending-split matrix in the fin frame:
+    # the same arithmetic up to summation order, the rotation and the exact symmetry of the
+    # upper-triangle storage. Those 1e-16 differences grow over the run (measured in ‖·‖₂:
+    # 5e-16 after 10 steps, 5e-14 after 100, 3–6e-12 after 1 000, about the same with an
+    # untilted plate, i.e. without the rotation). Bounds, relative to their maxima: the state
+    # and the strain energy 1e-11, the sampled stresses, kinetic energy and work 3e-12
+    # (issue 10 asks 1e-12: not met by this margin; see docs/validation.md).
+    assert np.linalg.norm(a.u - b.u) <= 1e-11 * np.linalg.norm(b.u)
+    np.testing.assert_allclose(a.se, b.se, rtol=0, atol=1e-11 * np.abs(b.se).max())
+    for k in ("vm", "p1", "ke", "work", "umax"):
+        x, y = getattr(a, k), getattr(b, k)
+        np.testing.assert_allclose(x, y, rtol=0, atol=3e-12 * np.abs(y).max(), err_msg=k)
+    scale = np.abs(b.u).max()
+    assert a.peak_t == b.peak_t and a.peak_node == b.peak_node
+    # w = u·n stays zero on the simply supported tip (a projection in frame B)
+    tip = np.isclose((m.op.x_nodes - ORIGIN) @ A1, 0.3)
+    w = a.u.reshape(-1, NDOF_NODE)[tip, :3] @ m.fin.plane.n
+    assert np.abs(w).max() <= 1e-12 * scale
