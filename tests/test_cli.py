@@ -77,7 +77,7 @@ def test_failed_stage_is_recorded(tmp_path):
     from flexnet_fe.pipeline import run_case
 
     # The traction case plus a default [flight] table, so two stages can run (both stubbed here).
-    case, case_dir = load_case(ROOT / "cases/traction_deploy", ["flight.lethal_radius=5.0"])
+    case, case_dir = load_case(ROOT / "cases/traction_deploy", ["flight.lethal_radius=5.0", 'missile.preset="radar"'])
     calls = []
 
     def ok(ctx):

@@ -205,8 +205,10 @@ def _time_steps(model: ShellModel, shell: ShellConfig, end_time: float, log, nam
     lam, resid = max_eigenvalue(model.op, steps=shell.lanczos_steps)
     dt_crit = critical_step(lam, shell.rayleigh_alpha, shell.rayleigh_beta)
     dt = shell.safety_factor * dt_crit
-    n_steps = max(1, math.ceil(end_time / dt))
     every = max(1, round(shell.history_interval / dt))
+    # whole sampling intervals, so that the last step is a sample in both backends (the PETSc
+    # path also samples the last step; the compiled one samples multiples of ``every`` only)
+    n_steps = every * max(1, math.ceil(end_time / (dt * every)))
     field_dt = shell.field_interval or end_time / 10.0
     field_every = max(every, round(field_dt / dt / every) * every)
     mat = model.material

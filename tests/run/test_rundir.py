@@ -172,7 +172,7 @@ def test_disk_full_in_a_stage_is_one_line_and_failed(tmp_path, capsys, monkeypat
     monkeypatch.setattr("flexnet_fe.pipeline.REGISTRY", reg)
     run = tmp_path / "run"
     rc = main(["run", str(ROOT / "cases/traction_deploy"), "--out", str(run), *TINY_DEPLOY,
-               "--set", 'case.stages=["deploy", "flight"]', "--set", "flight.lethal_radius=5.0"])
+               "--set", 'case.stages=["deploy", "flight"]', "--set", "flight.lethal_radius=5.0", "--set", 'missile.preset="radar"'])
     assert rc == RunIOError.exit_code == 74
     line = one_error_line(capsys.readouterr().err)
     assert "history.csv: No space left on device (ENOSPC)" in line and "stage flight" in line
@@ -200,7 +200,8 @@ def test_real_full_disk(tmp_path):
         args = ["run", ROOT / "cases/traction_deploy", "--out", run, "--set", "net.edge_length=1.0",
                 "--set", "net.mesh_size=0.25", "--set", "deploy.duration=0.05", "--set",
                 "deploy.snapshot_interval=0.05", "--set", 'case.stages=["deploy", "flight"]',
-                "--set", "flight.lethal_radius=5.0", "--set", "flight.t_end=6.0"]
+                "--set", "flight.lethal_radius=5.0", "--set", "flight.t_end=6.0",
+                "--set", 'missile.preset="radar"']
         r = run_cli(*args)
         assert r.returncode == 2 and "free in" in one_error_line(r.stderr) and not run.exists()
         r = run_cli(*args, "--force")
