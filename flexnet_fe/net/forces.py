@@ -35,6 +35,35 @@ def rope_tension(length, rest_length, stiffness, damping, offset, length_rate):
 
 
 @njit(cache=True)
+def spring_force(d0, d1, d2, w0, w1, w2, extra, rest_length, stiffness, damping, offset):
+    """The one rope-segment mapper of the package (deploy ``net.kernels`` and collide
+    ``collide.kernel``): Eq. (1)–(4) on a segment whose end j is at d = x_j − x_i [m] from end i
+    and moves at w = v_j − v_i [m/s] relative to it; ``extra`` [m] is rope length not on the
+    straight line (the hub wrap, Eq. 12–19; 0 otherwise).
+
+    Returns (T [N] from :func:`rope_tension`, unit vector u (3 floats) from i to j, straight
+    length |d| [m], length rate l̇ [m/s], stretch l − (l0 − offset) [m]); the force on node i is
+    +T u, on node j −T u. A zero-length segment returns T = 0 and u = 0."""
+    lf = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+    if lf == 0.0:
+        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, extra - (rest_length - offset)
+    u0 = d0 / lf
+    u1 = d1 / lf
+    u2 = d2 / lf
+    ldot = w0 * u0 + w1 * u1 + w2 * u2
+    ln = lf + extra
+    return (rope_tension(ln, rest_length, stiffness, damping, offset, ldot), u0, u1, u2, lf, ldot,
+            ln - (rest_length - offset))
+
+
+@njit(cache=True)
+def rope_elastic_energy(stretch, stiffness):
+    """Elastic energy ½ K s² [J] of one segment with stretch s = l − (l0 − offset) [m] > 0 (the
+    potential of :func:`rope_tension`'s spring part; 0 when slack)."""
+    return 0.5 * stiffness * stretch * stretch if stretch > 0.0 else 0.0
+
+
+@njit(cache=True)
 def aero_coefficients(sin_alpha):
     """Drag and lift coefficients of a rope at angle of attack α, Eq. (7)–(8).
 
@@ -70,52 +99,3 @@ def segment_aero_force(u0, u1, u2, length, vx, vy, vz, rho, diameter):
     a = q * CD_FRICTION * vm
     b = q * C_CROSS * vnm
     return (a * vx + b * (vx - ve * u0), a * vy + b * (vy - ve * u1), a * vz + b * (vz - ve * u2))
-
-
-@njit(cache=True)
-def accumulate_spring_forces(x, v, springs, rest_length, stiffness, damping, offset, skip, f, tension):
-    """Add all rope tensions into f, Eq. (1)–(4), (11).
-
-    x, v : node positions [m] / velocities [m/s], shape (n, 3); springs (m, 2) int64;
-    rest_length [m], stiffness [N/m], damping [N s/m], offset [m], shape (m,);
-    skip (m,) bool — segments handled elsewhere (hub links); f (n, 3) [N] accumulated in place;
-    tension (m,) [N] written (0 for skipped segments).
-    """
-    for s in range(springs.shape[0]):
-        if skip[s]:
-            tension[s] = 0.0
-            continue
-        i = springs[s, 0]
-        j = springs[s, 1]
-        d0 = x[j, 0] - x[i, 0]; d1 = x[j, 1] - x[i, 1]; d2 = x[j, 2] - x[i, 2]
-        l = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-        if l == 0.0:
-            tension[s] = 0.0
-            continue
-        u0 = d0 / l; u1 = d1 / l; u2 = d2 / l
-        ldot = (v[j, 0] - v[i, 0]) * u0 + (v[j, 1] - v[i, 1]) * u1 + (v[j, 2] - v[i, 2]) * u2
-        t = rope_tension(l, rest_length[s], stiffness[s], damping[s], offset[s], ldot)
-        tension[s] = t
-        f[i, 0] += t * u0; f[i, 1] += t * u1; f[i, 2] += t * u2
-        f[j, 0] -= t * u0; f[j, 1] -= t * u1; f[j, 2] -= t * u2
-
-
-@njit(cache=True)
-def accumulate_aero_forces(x, v, springs, diameter, rho, wind, skip, f):
-    """Add the rope aerodynamic loads into f [N], shape (n, 3): each segment's force
-    (:func:`segment_aero_force`, with the mean velocity of its ends minus ``wind`` (3,) [m/s])
-    goes half to each end node, Eq. (9)–(10). ``skip`` (m,) bool excludes segments."""
-    for s in range(springs.shape[0]):
-        if skip[s]:
-            continue
-        i = springs[s, 0]
-        j = springs[s, 1]
-        d0 = x[j, 0] - x[i, 0]; d1 = x[j, 1] - x[i, 1]; d2 = x[j, 2] - x[i, 2]
-        l = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-        if l == 0.0:
-            continue
-        fx, fy, fz = segment_aero_force(d0 / l, d1 / l, d2 / l, l, 0.5 * (v[i, 0] + v[j, 0]) - wind[0],
-                                        0.5 * (v[i, 1] + v[j, 1]) - wind[1],
-                                        0.5 * (v[i, 2] + v[j, 2]) - wind[2], rho, diameter[s])
-        f[i, 0] += 0.5 * fx; f[i, 1] += 0.5 * fy; f[i, 2] += 0.5 * fz
-        f[j, 0] += 0.5 * fx; f[j, 1] += 0.5 * fy; f[j, 2] += 0.5 * fz
