@@ -522,3 +522,149 @@ def segment_fin_contacts(a: np.ndarray, b: np.ndarray, shapes: ShapeArrays):
     depth, nrm = np.empty(n), np.empty((n, 3))
     _segment_kernel(a, b, *shapes, part, t, point, depth, nrm)
     return part, t, point, depth, nrm
+
+
+# ----------------------------------------------------------------------------- capsule contact
+# A rope segment is a capsule: the segment a–b [m] swept by a sphere of the rope radius. A fin is
+# a rounded plate: its planform polygon (the "core", in the fin's mid-plane, root extended into
+# the body as ``fin_poly``) swept by a sphere of the half-thickness h/2. The body of revolution is
+# used as it is. The gap of a capsule and a part is then (distance between the segment and the
+# part's core) − the radii; the closest pair (p on the segment at parameter s, q on the core)
+# gives the normal n = (p − q)/|p − q|, which turns continuously from face to edge to corner
+# wherever the pair is unique (the closest-point map of a convex set is continuous).
+
+
+@njit(cache=True)
+def _clamp01(t):
+    return 0.0 if t < 0.0 else (1.0 if t > 1.0 else t)
+
+
+@njit(cache=True)
+def _segment_edge_2d(au, av, aw, bu, bv, bw, cu, cv, du, dv):
+    """Closest points of the 3-D segment a–b (fin coordinates) and the in-plane edge c–d (w = 0).
+    Returns (squared distance [m²], s on a–b, t on c–d) (Ericson, Real-Time Collision Detection
+    §5.1.9; a parallel pair returns one of its closest pairs)."""
+    d1u, d1v, d1w = bu - au, bv - av, bw - aw
+    d2u, d2v = du - cu, dv - cv
+    ru, rv, rw = au - cu, av - cv, aw
+    a = d1u * d1u + d1v * d1v + d1w * d1w
+    e = d2u * d2u + d2v * d2v
+    f = d2u * ru + d2v * rv
+    if a <= 1e-30:
+        s = 0.0
+        t = _clamp01(f / e)
+    else:
+        c = d1u * ru + d1v * rv + d1w * rw
+        b = d1u * d2u + d1v * d2v
+        den = a * e - b * b
+        s = _clamp01((b * f - c * e) / den) if den > 1e-30 * a * e else 0.0
+        t = (b * s + f) / e
+        if t < 0.0:
+            t = 0.0
+            s = _clamp01(-c / a)
+        elif t > 1.0:
+            t = 1.0
+            s = _clamp01((b - c) / a)
+    pu, pv, pw = au + s * d1u, av + s * d1v, aw + s * d1w
+    qu, qv = cu + t * d2u, cv + t * d2v
+    return (pu - qu) ** 2 + (pv - qv) ** 2 + pw * pw, s, t
+
+
+@njit(cache=True)
+def _inside_polygon(u, v, poly):
+    """Is (u, v) inside (or on) the counter-clockwise convex polygon ``poly`` (k, 2)?"""
+    k = poly.shape[0]
+    for i in range(k):
+        au, av = poly[i, 0], poly[i, 1]
+        bu, bv = poly[(i + 1) % k, 0], poly[(i + 1) % k, 1]
+        if (u - au) * (bv - av) - (v - av) * (bu - au) > 0.0:
+            return False
+    return True
+
+
+@njit(cache=True)
+def segment_core_closest(a, b, origin, axes, poly):
+    """Closest pair of the segment a–b [m] (3,) in B and a fin's core polygon (its planform in
+    the mid-plane). origin (3,), axes (3, 3) rows e1, e2, n, poly (k, 2) counter-clockwise in
+    (u, v) [m] (``ShapeArrays`` fields of one fin).
+
+    Returns (dist [m] ≥ 0, s ∈ [0, 1] on the segment, q_u, q_v [m] fin coordinates of the
+    closest core point, crossed). crossed = True when the segment passes through the core
+    (dist = 0; s and q are the crossing). Exact: the closest pair of a segment and a convex
+    polygon is a crossing, an end point over the polygon, or a segment–edge pair."""
+    ra = np.empty(3)
+    rb = np.empty(3)
+    for k in range(3):
+        ra[k] = (a[0] - origin[0]) * axes[k, 0] + (a[1] - origin[1]) * axes[k, 1] + (a[2] - origin[2]) * axes[k, 2]
+        rb[k] = (b[0] - origin[0]) * axes[k, 0] + (b[1] - origin[1]) * axes[k, 1] + (b[2] - origin[2]) * axes[k, 2]
+    aw, bw = ra[2], rb[2]
+    if (aw <= 0.0 <= bw or bw <= 0.0 <= aw) and aw != bw:
+        sc = aw / (aw - bw)
+        cu = ra[0] + sc * (rb[0] - ra[0])
+        cv = ra[1] + sc * (rb[1] - ra[1])
+        if _inside_polygon(cu, cv, poly):
+            return 0.0, sc, cu, cv, True
+    best = np.inf
+    bs, bu, bv = 0.0, 0.0, 0.0
+    if _inside_polygon(ra[0], ra[1], poly):
+        best, bs, bu, bv = aw * aw, 0.0, ra[0], ra[1]
+    if _inside_polygon(rb[0], rb[1], poly) and bw * bw < best:
+        best, bs, bu, bv = bw * bw, 1.0, rb[0], rb[1]
+    k = poly.shape[0]
+    for i in range(k):
+        cu, cv = poly[i, 0], poly[i, 1]
+        du, dv = poly[(i + 1) % k, 0], poly[(i + 1) % k, 1]
+        d2, s, t = _segment_edge_2d(ra[0], ra[1], aw, rb[0], rb[1], bw, cu, cv, du, dv)
+        if d2 < best:
+            best, bs, bu, bv = d2, s, cu + t * (du - cu), cv + t * (dv - cv)
+    return np.sqrt(best), bs, bu, bv, best == 0.0
+
+
+@njit(cache=True)
+def segment_body_closest(a, b, prof_kind, prof_data, prof_part):
+    """Point of the segment a–b [m] (3,) in B deepest in (or nearest to) the body of revolution.
+
+    The body's signed distance d(p) is convex (convex solid), so along the segment
+    φ(s) = d(a + s (b − a)) is convex with derivative φ'(s) = n(p(s))·(b − a) (n the outward
+    normal of the closest surface point). Its minimum is at an end where φ' does not change
+    sign, otherwise at the root of φ', found by the Illinois (modified regula falsi) method
+    to |Δs| < 1e-9 (at most 60 evaluations; typically 5–10).
+
+    Returns (d [m] signed, s, n_x, n_y, n_z outward normal, q_x, q_y, q_z [m] surface point,
+    part id 0 or 1)."""
+    ab0, ab1, ab2 = b[0] - a[0], b[1] - a[1], b[2] - a[2]
+    p = np.empty(3)
+    d0, nx0, ny0, nz0, qx0, qy0, qz0, pt0 = body_closest_scalar(a, prof_kind, prof_data, prof_part)
+    g0 = nx0 * ab0 + ny0 * ab1 + nz0 * ab2
+    if g0 >= 0.0:
+        return d0, 0.0, nx0, ny0, nz0, qx0, qy0, qz0, pt0
+    d1, nx1, ny1, nz1, qx1, qy1, qz1, pt1 = body_closest_scalar(b, prof_kind, prof_data, prof_part)
+    g1 = nx1 * ab0 + ny1 * ab1 + nz1 * ab2
+    if g1 <= 0.0:
+        return d1, 1.0, nx1, ny1, nz1, qx1, qy1, qz1, pt1
+    s0, s1 = 0.0, 1.0
+    side = 0
+    sm = 0.5
+    dm, nxm, nym, nzm, qxm, qym, qzm, ptm = d0, nx0, ny0, nz0, qx0, qy0, qz0, pt0
+    for _ in range(60):
+        sm = (s0 * g1 - s1 * g0) / (g1 - g0)
+        if not (s0 < sm < s1):
+            sm = 0.5 * (s0 + s1)
+        p[0], p[1], p[2] = a[0] + sm * ab0, a[1] + sm * ab1, a[2] + sm * ab2
+        dm, nxm, nym, nzm, qxm, qym, qzm, ptm = body_closest_scalar(p, prof_kind, prof_data, prof_part)
+        gm = nxm * ab0 + nym * ab1 + nzm * ab2
+        if gm > 0.0:
+            s1, g1 = sm, gm
+            if side == 1:
+                g0 *= 0.5
+            side = 1
+        elif gm < 0.0:
+            s0, g0 = sm, gm
+            if side == -1:
+                g1 *= 0.5
+            side = -1
+        else:
+            break
+        if s1 - s0 < 1e-9:
+            break
+    return dm, sm, nxm, nym, nzm, qxm, qym, qzm, ptm

@@ -7,6 +7,7 @@ style offset) and the rope-segment aerodynamic force Eq. (5)–(10).
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 from numba import njit
 
@@ -99,3 +100,34 @@ def segment_aero_force(u0, u1, u2, length, vx, vy, vz, rho, diameter):
     a = q * CD_FRICTION * vm
     b = q * C_CROSS * vnm
     return (a * vx + b * (vx - ve * u0), a * vy + b * (vy - ve * u1), a * vz + b * (vz - ve * u2))
+
+
+class RopeMaterial(NamedTuple):
+    """The rope of a net, one home for its material (issue 14): youngs_modulus E [Pa] (axial,
+    Eq. (3)), poisson_ratio ν [-], density ρ [kg/m³], diameter d [m], transverse_modulus E_t [Pa]
+    (the contact law's E1, Eq. (30)), breaking_strength σ_b [Pa] (inf: unbreakable)."""
+
+    youngs_modulus: float
+    poisson_ratio: float
+    density: float
+    diameter: float
+    transverse_modulus: float
+    breaking_strength: float
+
+    @property
+    def radius(self) -> float:
+        """Rope radius d/2 [m]."""
+        return 0.5 * self.diameter
+
+    @property
+    def breaking_load(self) -> float:
+        """Tension at failure σ_b π d²/4 [N] (inf: unbreakable)."""
+        return self.breaking_strength * math.pi * self.diameter ** 2 / 4.0
+
+
+def rope_material(net_cfg) -> RopeMaterial:
+    """The ``RopeMaterial`` of a ``[net]`` table (``net.config.RopeNet``)."""
+    e = float(net_cfg.youngs_modulus)
+    return RopeMaterial(e, float(net_cfg.poisson_ratio), float(net_cfg.density), float(net_cfg.rope_diameter),
+                        e if net_cfg.transverse_modulus is None else float(net_cfg.transverse_modulus),
+                        math.inf if net_cfg.breaking_strength is None else float(net_cfg.breaking_strength))
