@@ -77,6 +77,9 @@ class CollideConfig(Section):
         4.0, description="reach = factor × sqrt(E/ρ) × duration (+ margin) around the missile's swept footprint [-]")
     crop_margin: NonNegative = Field(0.2, description="extra reach of the crop [m]")
     output_interval: Positive = Field(1e-5, description="sampling interval of histories and fin loads [s]")
+    cfc_class: Positive = Field(180.0, description=(
+        "SAE J211-1 channel frequency class of the filtered missile acceleration in the summary [-] "
+        "(collide.metrics; default 180, justified in docs/validation.md)"))
     snapshots: int = Field(24, ge=2, le=1000, description="number of net snapshots written (.vtu + .pvd)")
 
     @model_validator(mode="after")

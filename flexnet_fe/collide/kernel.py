@@ -21,7 +21,7 @@ Per step (symplectic Euler for the net nodes and the rigid missile, ``rigid_body
    contact slides to. Friction Eq. (32), regularised (``contact.law``);
 4. a centre line that reaches a part's core (fin: crosses the core polygon; body: enters the
    solid) is tunnelling: the call stops with status TUNNEL unless the model allows it, in which
-   case that pair gets no force and the skipped impulse (effective mass × normal speed at the
+   case that pair gets no force and the skipped impulse (effective mass × relative speed at the
    crossing's first step) is accumulated;
 5. missile and free nodes advanced; held nodes (crop) keep still, the impulse they receive is
    accumulated so the momentum balance closes.
@@ -169,20 +169,21 @@ def _apply(model, state, slot, fin, delta, kk, s, i, j, nb, qb, r, w_w, f, fmt, 
 
 
 @njit(cache=True)
-def _tunnel(model, state, slot, part, s, i, j, nb, r, step):
-    """Book a centre line that reached part ``part``'s core (tunnelling) at segment parameter s
-    (normal nb (3,) in B, for the skipped normal impulse). Returns TUNNEL unless allowed."""
+def _tunnel(model, state, slot, part, s, i, j, step):
+    """Book a centre line that reached part ``part``'s core (tunnelling) at segment parameter s.
+    The impulse a contact would have had to deliver to stop it, m_eff |v_rel| (m_eff =
+    (1 − s) m_i + s m_j, v_rel its velocity relative to the missile's CG), is booked as skipped
+    at the crossing's first step. Returns TUNNEL unless allowed."""
     state.acc[A_CROSS] += 1.0
-    if state.vk[slot] >= 0.0:  # first step of this crossing: book the impulse it skips
-        nw0, nw1, nw2 = _rv(r, nb[0], nb[1], nb[2])
+    if state.vk[slot] >= 0.0:
         w = 1.0 - s
-        vn = 0.0
-        for k, nk in enumerate((nw0, nw1, nw2)):
-            vn += (w * state.v[i, k] + s * state.v[j, k] - state.mv[k]) * nk
-        state.acc[A_SKIPPED] += (w * model.mass[i] + s * model.mass[j]) * abs(vn)
+        v2 = 0.0
+        for k in range(3):
+            v2 += (w * state.v[i, k] + s * state.v[j, k] - state.mv[k]) ** 2
+        state.acc[A_SKIPPED] += (w * model.mass[i] + s * model.mass[j]) * np.sqrt(v2)
         if state.acc[A_CROSS] == 1.0:
             state.acc[A_TUN_PART] = part
-            state.acc[A_TUN_SPEED] = abs(vn)
+            state.acc[A_TUN_SPEED] = np.sqrt(v2)
             state.acc[A_TUN_STEP] = step
     state.vk[slot] = -1.0
     return OK if model.allow_tunnel else TUNNEL
@@ -208,7 +209,7 @@ def segment_contacts(model, state, e, pa, pb, r, w_w, f, fmt, dt, apply, step):
             pa, pb, model.prof_kind, model.prof_data, model.prof_part)
         delta = rad - d
         if d <= 0.0:
-            if apply and _tunnel(model, state, base, part, s, i, j, nb, r, step) == TUNNEL:
+            if apply and _tunnel(model, state, base, part, s, i, j, step) == TUNNEL:
                 return energy, TUNNEL, ncon
         elif delta > 0.0:
             energy += contact_potential(delta, model.k_body, model.exponent)
@@ -237,11 +238,8 @@ def segment_contacts(model, state, e, pa, pb, r, w_w, f, fmt, dt, apply, step):
             continue
         half = model.fin_half[fi]
         if crossed:
-            if apply:
-                for k in range(3):
-                    nb[k] = ax[2, k]
-                if _tunnel(model, state, slot, FIN_PART_OFFSET + fi, s, i, j, nb, r, step) == TUNNEL:
-                    return energy, TUNNEL, ncon
+            if apply and _tunnel(model, state, slot, FIN_PART_OFFSET + fi, s, i, j, step) == TUNNEL:
+                return energy, TUNNEL, ncon
             continue
         delta = rad + half - dist
         if delta <= 0.0:
@@ -367,7 +365,8 @@ def _advance(model, state, n_steps, dt):
             return status
         if ncon > acc[A_NCONTACT]:
             acc[A_NCONTACT] = ncon
-        b0, b1, b2 = _rtv(r, fmt[0], fmt[1], fmt[2])
+        g = model.gravity
+        b0, b1, b2 = _rtv(r, fmt[0] - model.m_mass * g[0], fmt[1] - model.m_mass * g[1], fmt[2] - model.m_mass * g[2])
         acc[A_IMP_B] += b0 * dt
         acc[A_IMP_B + 1] += b1 * dt
         acc[A_IMP_B + 2] += b2 * dt

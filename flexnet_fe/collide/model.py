@@ -18,14 +18,14 @@ A_DISS_FRICTION = 2  # energy dissipated by friction, whole run [J]
 A_WORK_GRAVITY = 3  # work of gravity on net + missile, whole run [J]
 A_BROKEN = 4  # energy released by broken segments (their elastic + contact energy at failure) [J]
 A_PHELD = 5  # impulse received by held nodes, whole run, W [N s] (5, 6, 7)
-A_IMP_B = 8  # Σ Rᵀ F dt over the call, F the total force on the missile [N s] (8, 9, 10)
+A_IMP_B = 8  # Σ Rᵀ F dt over the call, F the contact force on the missile (no gravity) [N s] (8, 9, 10)
 A_PEN = 11  # largest penetration δ of the run [m]
 A_PEN_RATIO = 12  # largest δ / (rope radius + core half-thickness) of the run [-] (1 = centre line on the core)
 A_NCONTACT = 13  # largest number of simultaneous (segment, part) contacts within the call
 A_FCONTACT = 14  # Σ |F_contact| dt over the call [N s]
 A_NBROKEN = 15  # segments broken, whole run
 A_CROSS = 16  # segment-steps whose centre line crossed a part's core (tunnelling), whole run
-A_SKIPPED = 17  # impulse skipped by tunnelling (allowed runs), whole run [N s]: m_eff |v_n| at each crossing's first step
+A_SKIPPED = 17  # impulse skipped by tunnelling (allowed runs), whole run [N s]: m_eff |v_rel| at each crossing's first step
 A_TUN_PART = 18  # part id of the first tunnelling
 A_TUN_SPEED = 19  # approach speed of the first tunnelling [m/s]
 A_TUN_STEP = 20  # step index (within the call) of the first tunnelling

@@ -31,6 +31,7 @@ from flexnet_fe.collide import model as M
 from flexnet_fe.collide.config import CollideConfig
 from flexnet_fe.collide.crop import (active_segments, boundary_motion, boundary_nodes, crop_reach, free_nodes,
                                      wave_speed)
+from flexnet_fe.collide.metrics import FinContacts, MissileHistory, collision_metrics
 from flexnet_fe.collide.scene import HeldNet, MissileStart, fin_planes, place_missile
 from flexnet_fe.collide.timestep import StepChoice, choose_step, contact_stiffness
 from flexnet_fe.contact.law import DAMPING_CODE, hysteresis_factor
@@ -211,7 +212,7 @@ def _stop_message(status, st, cfg, t, names, setup, dt) -> str:
     acc = st.acc
     if status == M.TUNNEL:
         return (f"collide: tunnelling at t ≈ {t:.4g} s: a rope centre line reached the core of "
-                f"{names[int(acc[M.A_TUN_PART])]} at a normal speed of {acc[M.A_TUN_SPEED]:.4g} m/s (largest "
+                f"{names[int(acc[M.A_TUN_PART])]} at a relative speed of {acc[M.A_TUN_SPEED]:.4g} m/s (largest "
                 f"penetration {acc[M.A_PEN]:.3g} m = {acc[M.A_PEN_RATIO]:.3g} × (rope radius + half-thickness)); "
                 f"K_body = {setup.model.k_body:.3g}, K_fin = {setup.model.k_fin:.3g} from rule "
                 f"'{cfg.stiffness_rule.value}', dt = {dt:.3g} s. The contact is too soft for this impact: raise "
@@ -378,12 +379,23 @@ def _summary(rec: _Recorder, setup: Setup, loads: FinLoads, x_start, dt, steps, 
     if acc[M.A_CROSS] > 0:
         warnings.append(f"collide: TUNNELLING (allowed by the case): {int(acc[M.A_CROSS])} segment-steps passed "
                         f"through a part, skipping ≈ {acc[M.A_SKIPPED]:.3g} N s of impulse")
+    metrics = collision_metrics(
+        MissileHistory(t_s=c["t_s"], vel_world_mps=np.column_stack([c[f"vel_{a}_mps"] for a in "xyz"]),
+                       accel_body_mps2=np.column_stack([c[f"accel_body_{a}_mps2"] for a in "xyz"]),
+                       contact_force_n=c["contact_force_mean_n"], gravity_mps2=km.gravity, mass_kg=missile.mass),
+        FinContacts(list(loads.fin_names), loads.fin, loads.force, cfg.output_interval), cfc=cfg.cfc_class)
+    warnings += metrics.pop("warnings")
     summary = {
-        "peak_accel_mps2": float(a_mag.max()),
-        "peak_accel_time_s": float(c["t_s"][k_peak]),
-        "peak_accel_axis_mps2": [float(np.max(np.abs(c[f"accel_body_{a}_mps2"]))) for a in "xyz"],
-        "duration_s": duration,
-        "dv_over_v": float(np.max(c["dv_rel"])),
+        # headline numbers: CFC-filtered peak (collide.metrics) and window-free Δv, impulses, duration
+        "peak_accel_mps2": metrics["peak_accel_mps2"],
+        "peak_accel_time_s": metrics["peak_accel_time_s"],
+        "peak_accel_axis_mps2": metrics["peak_accel_axis_mps2"],
+        "duration_s": metrics["contact_duration_s"],
+        "dv_over_v": metrics["dv_over_v"],
+        **{k: v for k, v in metrics.items() if k not in ("peak_accel_mps2", "peak_accel_time_s",
+                                                          "peak_accel_axis_mps2", "dv_over_v")},
+        "raw_interval_peak_time_s": float(c["t_s"][k_peak]),
+        "contact_rows_duration_s": duration,
         "speed_change_rel": float(c["speed_change_rel"][-1]),
         "max_attitude_change_rad": float(np.max(c["attitude_change_rad"])),
         "passed_through": bool(c["contacts"][-1] == 0 and net_along < tail_along),
@@ -409,14 +421,9 @@ def _summary(rec: _Recorder, setup: Setup, loads: FinLoads, x_start, dt, steps, 
         "active_segments": int(km.seg.shape[0]),
         "crop_reach_m": setup.reach if math.isfinite(setup.reach) else None,
         "crop_boundary_motion_m": boundary_motion(x_start, st.x, setup.boundary),
-        "fin_impulse_ns": {},
         "warnings": warnings,
         "wall_s": wall,
     }
-    for i, name in enumerate(loads.fin_names):
-        sel = loads.fin == i
-        summary["fin_impulse_ns"][str(name)] = float(np.linalg.norm(loads.force[sel].sum(axis=0))
-                                                     * cfg.output_interval)
     return summary
 
 
