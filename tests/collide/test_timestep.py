@@ -9,6 +9,7 @@ import pytest
 
 from flexnet_fe.collide.config import CollideConfig
 from flexnet_fe.collide.timestep import choose_step, contact_limit, contact_stiffness, spring_limit
+from flexnet_fe.contact.law import DAMPING_CODE, hysteresis_factor
 from flexnet_fe.contact.stiffness import crossed_cylinders_stiffness, hertz_max_penetration, hertz_stiffness
 
 
@@ -46,8 +47,10 @@ def test_stiffness_comes_from_the_rope_not_from_dt():
     assert k_fin == pytest.approx(4 / 3 * e_star * (2.25e-3 * 3e-3) ** 0.25, rel=1e-14)
     assert k_body == pytest.approx(4 / 3 * e_star * (2.25e-3 * 0.1015) ** 0.25, rel=1e-14)
     st = choose_step(cfg, np.array([300.0]), np.array([1.6e-3]), np.array([1.6e-3]), 1.6e-3, 4, 2.25e-3, 3e-3, k_body)
-    dt_c, delta = contact_limit(k_body, 1.5, 1.6e-3, 500.0, 0.0, 2.25e-3 + 3e-3, 4)
-    assert st.dt_contact == pytest.approx(dt_c, rel=0.05)  # the damped limit is a little shorter
+    chi = hysteresis_factor(DAMPING_CODE[cfg.damping_model], cfg.restitution, 500.0)
+    dt_c, delta = contact_limit(k_body, 1.5, 1.6e-3, 500.0, chi, 2.25e-3 + 3e-3, 4)
+    assert st.dt_contact == pytest.approx(dt_c, rel=1e-12)
+    assert dt_c < contact_limit(k_body, 1.5, 1.6e-3, 500.0, 0.0, 2.25e-3 + 3e-3, 4)[0]  # damping shortens it
     assert st.dt_travel == pytest.approx(0.1 * 2.25e-3 / 500.0, rel=1e-12)
     assert st.dt == min(0.5 * st.dt_contact, 0.5 * st.dt_spring, st.dt_travel)
 
