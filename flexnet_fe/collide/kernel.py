@@ -32,6 +32,8 @@ core point inside the body's radius is ignored — the body contact holds the ro
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 from numba import njit
 
@@ -61,9 +63,31 @@ def _rtv(r, a0, a1, a2):
             r[0, 2] * a0 + r[1, 2] * a1 + r[2, 2] * a2)
 
 
+class StepWork(NamedTuple):
+    """Scratch of one step (allocated once per call): r (3, 3) attitude B → W; w_w [rad/s] (3,)
+    missile rate in W; f [N] (n, 3) forces on the nodes; fmt (6,) force [N] and torque about the
+    CG [N m] on the missile, W; pbn [m] (n, 3) node positions in B; nb (3,) contact normal and
+    qb [m] (3,) contact point of the current pair, B."""
+
+    r: np.ndarray
+    w_w: np.ndarray
+    f: np.ndarray
+    fmt: np.ndarray
+    pbn: np.ndarray
+    nb: np.ndarray
+    qb: np.ndarray
+
+
 @njit(cache=True)
-def _to_body(model, state, r, pbn):
-    """Node positions in B [m] into pbn (n, 3)."""
+def _work(n):
+    return StepWork(np.eye(3), np.zeros(3), np.zeros((n, 3)), np.zeros(6), np.zeros((n, 3)), np.zeros(3),
+                    np.zeros(3))
+
+
+@njit(cache=True)
+def _to_body(model, state, wk):
+    """Node positions in B [m] into wk.pbn (n, 3); wk.r must hold the attitude."""
+    r, pbn = wk.r, wk.pbn
     for i in range(state.x.shape[0]):
         b0, b1, b2 = _rtv(r, state.x[i, 0] - state.mx[0], state.x[i, 1] - state.mx[1], state.x[i, 2] - state.mx[2])
         pbn[i, 0] = b0 + model.cg_b[0]
@@ -105,15 +129,19 @@ def _near_fin(model, fi, pa, pb):
 
 
 @njit(cache=True)
-def _apply(model, state, slot, fin, delta, kk, s, i, j, nb, qb, r, w_w, f, fmt, dt):
+def _apply(model, state, wk, slot, fin, delta, s, dt):
     """Force of one (segment, part) contact on the net and the missile, Eq. (28), (29), (32).
 
-    delta [m] > 0 penetration; kk [N/m^m] stiffness; s segment parameter; i, j its nodes;
-    nb (3,) unit normal (towards the rope) and qb [m] (3,) missile contact point, in B; r (3, 3)
-    B → W; w_w [rad/s] (3,) missile rate in W. Adds the force to f (n, 3) (weights 1 − s, s) and
-    its reaction to fmt (6,) (missile force, torque about the CG, W); books the dissipation;
-    fin ≥ 0: adds the impulse to the fin-load slot. Returns |F| [N]."""
-    x, v, mx, mv = state.x, state.v, state.mx, state.mv
+    slot: contact slot (segment e = slot // (1 + nf)); fin: fin index or −1 (body); delta [m] > 0
+    penetration; s segment parameter; wk.nb (3,) unit normal (towards the rope) and wk.qb [m]
+    (3,) missile contact point, in B. Adds the force to wk.f (weights 1 − s, s on the segment's
+    nodes) and its reaction to wk.fmt (missile force, torque about the CG, W); books the
+    dissipation; fin ≥ 0: adds the impulse to the fin-load slot. Returns |F| [N]."""
+    v, mv = state.v, state.mv
+    r, w_w, f, fmt, nb, qb = wk.r, wk.w_w, wk.f, wk.fmt, wk.nb, wk.qb
+    e = slot // (model.fin_half.shape[0] + 1)
+    i, j = model.seg[e, 0], model.seg[e, 1]
+    kk = model.k_fin if fin >= 0 else model.k_body
     nw0, nw1, nw2 = _rv(r, nb[0], nb[1], nb[2])
     l0, l1, l2 = _rv(r, qb[0] - model.cg_b[0], qb[1] - model.cg_b[1], qb[2] - model.cg_b[2])
     w = 1.0 - s
@@ -169,13 +197,15 @@ def _apply(model, state, slot, fin, delta, kk, s, i, j, nb, qb, r, w_w, f, fmt, 
 
 
 @njit(cache=True)
-def _tunnel(model, state, slot, part, s, i, j, step):
+def _tunnel(model, state, slot, part, s, step):
     """Book a centre line that reached part ``part``'s core (tunnelling) at segment parameter s.
     The impulse a contact would have had to deliver to stop it, m_eff |v_rel| (m_eff =
     (1 − s) m_i + s m_j, v_rel its velocity relative to the missile's CG), is booked as skipped
     at the crossing's first step. Returns TUNNEL unless allowed."""
     state.acc[A_CROSS] += 1.0
     if state.vk[slot] >= 0.0:
+        e = slot // (model.fin_half.shape[0] + 1)
+        i, j = model.seg[e, 0], model.seg[e, 1]
         w = 1.0 - s
         v2 = 0.0
         for k in range(3):
@@ -190,32 +220,31 @@ def _tunnel(model, state, slot, part, s, i, j, step):
 
 
 @njit(cache=True)
-def segment_contacts(model, state, e, pa, pb, r, w_w, f, fmt, dt, apply, step):
-    """All contacts of capsule e (ends pa, pb [m] (3,) in B) with the missile's parts.
+def segment_contacts(model, state, wk, e, dt, apply, step):
+    """All contacts of capsule e (ends wk.pbn[i], wk.pbn[j] in B) with the missile's parts.
 
     apply: add forces (``_apply``) and update the contact slots; otherwise only measure.
     Returns (stored contact energy Σ U(δ) [J], status, number of contacts)."""
     nf = model.fin_half.shape[0]
     base = e * (1 + nf)
-    i, j = model.seg[e, 0], model.seg[e, 1]
+    pa, pb = wk.pbn[model.seg[e, 0]], wk.pbn[model.seg[e, 1]]
     rad = model.rope_radius
     energy = 0.0
     ncon = 0
-    nb = np.empty(3)
-    qb = np.empty(3)
+    nb, qb = wk.nb, wk.qb
     # body of revolution (one convex solid: body + nose)
     if _axis_distance(pa, pb) <= model.bbox[3] + rad:
         d, s, nb[0], nb[1], nb[2], qb[0], qb[1], qb[2], part = segment_body_closest(
             pa, pb, model.prof_kind, model.prof_data, model.prof_part)
         delta = rad - d
         if d <= 0.0:
-            if apply and _tunnel(model, state, base, part, s, i, j, step) == TUNNEL:
+            if apply and _tunnel(model, state, base, part, s, step) == TUNNEL:
                 return energy, TUNNEL, ncon
         elif delta > 0.0:
             energy += contact_potential(delta, model.k_body, model.exponent)
             ncon += 1
             if apply:
-                _apply(model, state, base, -1, delta, model.k_body, s, i, j, nb, qb, r, w_w, f, fmt, dt)
+                _apply(model, state, wk, base, -1, delta, s, dt)
                 _book_penetration(state, delta, delta / rad)
         elif apply:
             state.vk[base] = 0.0
@@ -238,7 +267,7 @@ def segment_contacts(model, state, e, pa, pb, r, w_w, f, fmt, dt, apply, step):
             continue
         half = model.fin_half[fi]
         if crossed:
-            if apply and _tunnel(model, state, slot, FIN_PART_OFFSET + fi, s, i, j, step) == TUNNEL:
+            if apply and _tunnel(model, state, slot, FIN_PART_OFFSET + fi, s, step) == TUNNEL:
                 return energy, TUNNEL, ncon
             continue
         delta = rad + half - dist
@@ -252,7 +281,7 @@ def segment_contacts(model, state, e, pa, pb, r, w_w, f, fmt, dt, apply, step):
             for k in range(3):
                 nb[k] = (pa[k] + s * (pb[k] - pa[k]) - qb[k]) / dist
                 qb[k] += half * nb[k]  # the fin's surface point under the rope
-            _apply(model, state, slot, fi, delta, model.k_fin, s, i, j, nb, qb, r, w_w, f, fmt, dt)
+            _apply(model, state, wk, slot, fi, delta, s, dt)
             _book_penetration(state, delta, delta / (rad + half))
     return energy, OK, ncon
 
@@ -268,9 +297,9 @@ def _book_penetration(state, delta, ratio):
 
 
 @njit(cache=True)
-def _rope_forces(model, state, pbn, r, w_w, f, fmt, dt):
-    """Rope tensions into f (Eq. (1)–(4)); breaks segments past their breaking stretch."""
-    x, v, seg = state.x, state.v, model.seg
+def _rope_forces(model, state, wk, dt):
+    """Rope tensions into wk.f (Eq. (1)–(4)); breaks segments past their breaking stretch."""
+    x, v, seg, f = state.x, state.v, model.seg, wk.f
     for e in range(seg.shape[0]):
         if not state.alive[e]:
             continue
@@ -281,7 +310,7 @@ def _rope_forces(model, state, pbn, r, w_w, f, fmt, dt):
         if stretch > model.break_stretch[e]:
             state.alive[e] = False
             state.acc[A_NBROKEN] += 1.0
-            u_c, _, _ = segment_contacts(model, state, e, pbn[i], pbn[j], r, w_w, f, fmt, dt, False, 0)
+            u_c, _, _ = segment_contacts(model, state, wk, e, dt, False, 0)
             state.acc[A_BROKEN] += rope_elastic_energy(stretch, model.k[e]) + u_c
             continue
         if t > 0.0:
@@ -295,10 +324,11 @@ def _rope_forces(model, state, pbn, r, w_w, f, fmt, dt):
 
 
 @njit(cache=True)
-def _step_contacts(model, state, pbn, r, w_w, f, fmt, dt, step):
+def _step_contacts(model, state, wk, dt, step):
     """Contacts of all live segments near the missile. Returns (status, contacts)."""
     nf = model.fin_half.shape[0]
     ncon = 0
+    pbn = wk.pbn
     for e in range(model.seg.shape[0]):
         i, j = model.seg[e, 0], model.seg[e, 1]
         if not state.alive[e] or not _near_missile(model, pbn[i], pbn[j]):
@@ -307,7 +337,7 @@ def _step_contacts(model, state, pbn, r, w_w, f, fmt, dt, step):
                 if state.vk[base + p] != 0.0:
                     state.vk[base + p] = 0.0
             continue
-        _, status, nc = segment_contacts(model, state, e, pbn[i], pbn[j], r, w_w, f, fmt, dt, True, step)
+        _, status, nc = segment_contacts(model, state, wk, e, dt, True, step)
         ncon += nc
         if status != OK:
             return status, ncon
@@ -315,9 +345,9 @@ def _step_contacts(model, state, pbn, r, w_w, f, fmt, dt, step):
 
 
 @njit(cache=True)
-def _integrate(model, state, f, fmt, dt):
+def _integrate(model, state, wk, dt):
     """Missile and free nodes one step (symplectic Euler); held nodes book their impulse."""
-    x, v, g = state.x, state.v, model.gravity
+    x, v, g, f, fmt = state.x, state.v, model.gravity, wk.f, wk.fmt
     for k in range(3):
         state.acc[A_WORK_GRAVITY] += model.m_mass * g[k] * state.mv[k] * dt
     q = rigid_step(state.mx, state.mv, state.mq, state.mh, fmt[:3], fmt[3:], model.m_mass, model.inv_inertia, dt)
@@ -337,10 +367,8 @@ def _integrate(model, state, f, fmt, dt):
 @njit(cache=True)
 def _advance(model, state, n_steps, dt):
     n = state.x.shape[0]
-    f = np.zeros((n, 3))
-    pbn = np.zeros((n, 3))
-    fmt = np.zeros(6)
-    w_w = np.zeros(3)
+    wk = _work(n)
+    f, fmt, w_w = wk.f, wk.fmt, wk.w_w
     acc = state.acc
     for k in range(3):
         acc[A_IMP_B + k] = 0.0
@@ -348,7 +376,8 @@ def _advance(model, state, n_steps, dt):
     acc[A_NCONTACT] = 0.0
     acc[A_FCONTACT] = 0.0
     for step in range(n_steps):
-        r = quat_to_matrix(state.mq)
+        wk.r[:, :] = quat_to_matrix(state.mq)
+        r = wk.r
         hb0, hb1, hb2 = _rtv(r, state.mh[0], state.mh[1], state.mh[2])
         wb0, wb1, wb2 = _rv(model.inv_inertia, hb0, hb1, hb2)
         w_w[0], w_w[1], w_w[2] = _rv(r, wb0, wb1, wb2)
@@ -358,9 +387,9 @@ def _advance(model, state, n_steps, dt):
         for i in range(n):
             for k in range(3):
                 f[i, k] = model.mass[i] * model.gravity[k]
-        _to_body(model, state, r, pbn)
-        _rope_forces(model, state, pbn, r, w_w, f, fmt, dt)
-        status, ncon = _step_contacts(model, state, pbn, r, w_w, f, fmt, dt, step)
+        _to_body(model, state, wk)
+        _rope_forces(model, state, wk, dt)
+        status, ncon = _step_contacts(model, state, wk, dt, step)
         if status != OK:
             return status
         if ncon > acc[A_NCONTACT]:
@@ -370,7 +399,7 @@ def _advance(model, state, n_steps, dt):
         acc[A_IMP_B] += b0 * dt
         acc[A_IMP_B + 1] += b1 * dt
         acc[A_IMP_B + 2] += b2 * dt
-        _integrate(model, state, f, fmt, dt)
+        _integrate(model, state, wk, dt)
         if not (np.isfinite(state.mx[0]) and np.isfinite(state.mv[2])):
             return NONFINITE
     for i in range(n):
@@ -402,11 +431,9 @@ def energies(model, state):
         if model.free[i]:
             ke += 0.5 * model.mass[i] * (v[i, 0] ** 2 + v[i, 1] ** 2 + v[i, 2] ** 2)
     pe = 0.0
-    r = quat_to_matrix(state.mq)
-    pbn = np.zeros((x.shape[0], 3))
-    _to_body(model, state, r, pbn)
-    f = np.zeros((1, 3))
-    fmt = np.zeros(6)
+    wk = _work(x.shape[0])
+    wk.r[:, :] = quat_to_matrix(state.mq)
+    _to_body(model, state, wk)
     uc = 0.0
     for e in range(model.seg.shape[0]):
         if not state.alive[e]:
@@ -414,7 +441,7 @@ def energies(model, state):
         i, j = model.seg[e, 0], model.seg[e, 1]
         ln = np.sqrt((x[j, 0] - x[i, 0]) ** 2 + (x[j, 1] - x[i, 1]) ** 2 + (x[j, 2] - x[i, 2]) ** 2)
         pe += rope_elastic_energy(ln - (model.rest[e] - model.off[e]), model.k[e])
-        if _near_missile(model, pbn[i], pbn[j]):
-            u, _, _ = segment_contacts(model, state, e, pbn[i], pbn[j], r, fmt[:3], f, fmt, 0.0, False, 0)
+        if _near_missile(model, wk.pbn[i], wk.pbn[j]):
+            u, _, _ = segment_contacts(model, state, wk, e, 0.0, False, 0)
             uc += u
     return ke, pe, uc
