@@ -22,16 +22,16 @@ class NetSource(str, Enum):
 
 
 class StiffnessRule(str, Enum):
-    """How the contact stiffness K_n [N/m^m] is chosen.
+    """How the contact stiffness K [N/m^m] of Eq. (28) is chosen (never from the time step).
 
-    hertz_eq31     the paper's Eq. (31) with the rope radius and the rope's E, ν (rigid missile)
-    penalty        LS-DYNA SOFT=1 style k = s·m/dt² (m the lightest active node mass), expressed
-                   as K_n = k δ_ref^(1−m) with δ_ref = ``penalty_reference_fraction`` × rope radius
-    given          ``contact_stiffness`` as written in the case
+    hertz_eq30   Eq. (30) for crossed cylinders (rope radius r × fin half-thickness h/2 on fins,
+                 r × body radius R on the body: R_e = sqrt(R1 R2)), contact modulus
+                 E* = E_t/(1 − ν²) with the rope's transverse modulus E_t (``net.transverse_modulus``)
+                 and a rigid missile
+    given        ``contact_stiffness`` as written in the case, for every part
     """
 
-    hertz_eq31 = "hertz_eq31"
-    penalty = "penalty"
+    hertz_eq30 = "hertz_eq30"
     given = "given"
 
 
@@ -57,35 +57,29 @@ class CollideConfig(Section):
                                description="coefficient of restitution e of Eq. (29) [-] (not given in the paper)")
     damping_model: DampingModel = Field(DampingModel.lankarani_nikravesh,
                                         description="contact damping model (Eq. (29) as printed = lankarani_nikravesh)")
-    damping_min_impact_speed: Positive = Field(
-        1.0, description="contacts that start with an approach speed v_k below this are elastic (χ ∝ 1/v_k "
-                         "would be unbounded) [m/s]")
+    damping_min_approach_speed: Positive = Field(
+        1.0, description="floor of the approach speed v_k in χ = c/v_k (v_k = largest approach speed of the "
+                         "contact so far, contact.law.approach_speed) [m/s]")
     friction_coefficient: NonNegative = Field(0.2, description="Coulomb friction μ of Eq. (32) [-] (not given in the paper)")
     friction_regularisation_speed: Positive = Field(
         0.1, description="v_reg of tanh(|v_t|/v_reg) replacing sign(v_t) in Eq. (32) [m/s]")
-    stiffness_rule: StiffnessRule = Field(StiffnessRule.penalty, description="rule for the contact stiffness K_n")
-    rope_poisson_ratio: float = Field(0.3, ge=0.0, lt=0.5, description="ν1 of the rope in Eq. (31) [-]")
-    penalty_scale: Positive = Field(0.1, le=1.0, description="s of the penalty rule k = s·m/dt² [-] (LS-DYNA SOFSCL default 0.1)")
-    penalty_reference_fraction: Positive = Field(
-        0.1, description="δ_ref / rope radius at which the penalty's secant stiffness equals s·m/dt² [-]")
-    contact_stiffness: Positive | None = Field(None, description="K_n for stiffness_rule = 'given' [N/m^m]")
-
-    detection_points_per_segment: int = Field(3, ge=0, le=64,
-                                              description="extra equally spaced detection points between two net nodes [-]")
-    fin_segment_test: bool = Field(True, description="test each rope segment against the thin fins (catches edge crossings)")
-    tunnelling_fraction: Positive = Field(
-        0.5, description="tunnelling: a rope centre line deeper inside the missile than this fraction of the rope "
-                         "radius (body) or the fin half-thickness (fin) [-]")
-    allow_tunnelling: bool = Field(False, description="finish a tunnelling run and flag it instead of stopping")
+    stiffness_rule: StiffnessRule = Field(StiffnessRule.hertz_eq30, description="rule for the contact stiffness K")
+    contact_stiffness: Positive | None = Field(None, description="K for stiffness_rule = 'given' [N/m^m]")
+    allow_tunnelling: bool = Field(False, description=(
+        "finish a run in which a rope centre line reaches a part's core (the rope passes through) and "
+        "report the skipped impulse, instead of stopping"))
 
     dt_safety: Fraction = Field(0.5, gt=0.0, description="time step = safety × stability limit of springs and contact [-]")
     pass_through_fraction: Fraction = Field(
-        0.1, gt=0.0, description="relative speed × dt ≤ this × min(rope radius, fin half-thickness) [-]")
+        0.1, gt=0.0, description="travel per step: relative speed × dt ≤ this × min(rope radius, fin half-thickness) [-]")
     crop: bool = Field(True, description="integrate only the net the impact can reach; hold the rest")
     crop_wave_speed_factor: Positive = Field(
         4.0, description="reach = factor × sqrt(E/ρ) × duration (+ margin) around the missile's swept footprint [-]")
     crop_margin: NonNegative = Field(0.2, description="extra reach of the crop [m]")
     output_interval: Positive = Field(1e-5, description="sampling interval of histories and fin loads [s]")
+    cfc_class: Positive = Field(180.0, description=(
+        "SAE J211-1 channel frequency class of the filtered missile acceleration in the summary [-] "
+        "(collide.metrics; default 180, justified in docs/validation.md)"))
     snapshots: int = Field(24, ge=2, le=1000, description="number of net snapshots written (.vtu + .pvd)")
 
     @model_validator(mode="after")

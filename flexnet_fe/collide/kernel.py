@@ -1,566 +1,447 @@
-"""The compiled collision loop: rope springs + detection + contact + rigid missile, many steps per call.
+"""The compiled collision loop: ``advance(model, state, n_steps, dt)`` (data in ``collide.model``).
 
-One call of :func:`advance` integrates one output interval (``n_steps`` steps of ``dt``) with
-symplectic Euler for the net nodes and the missile (``rigid_body.rigid_step``). Per step:
+Per step (symplectic Euler for the net nodes and the rigid missile, ``rigid_body.rigid_step``):
 
-1. rope forces, Eq. (1)–(4) (tension only, with axial damping c l̇);
-2. detection, paper §IV: every free net node and ``n_det`` equally spaced points per segment
-   (the paper's "additional detection points") are transformed into the missile body frame B and
-   tested against the missile's contact shapes (``missile.shapes``: signed distance to the surface);
-   a point whose distance is below the rope radius is in contact with penetration
-   δ = rope radius − distance (the paper's point–plane distance Eq. (26) generalised to curved
-   surfaces; normal = surface normal, Eq. (27));
-3. the segment test against thin fins (``missile.shapes.segment_fin_contact``): a rope segment
-   whose centre line crosses a fin plate between detection points (not counting the chord of a
-   rope wrapped on the body, which dips into the fin's root extension inside the body). With
-   ``seg_test`` on it gets a contact force at the crossing, penetration = the centre line's depth
-   past the fin edge (so the force starts from zero); with it off — or when a crossing is already
-   deeper than the tunnelling limit when first seen — the crossing is only measured and counts
-   as tunnelling;
-4. normal force Eq. (28)–(29) with the damping model's χ fixed at first touch (v_k per contact),
-   friction Eq. (32) regularised (``contact.law``); a segment point's force is shared by its two
-   nodes with the linear weights (1 − s, s); the missile gets the opposite force at the surface
-   point, and its torque about the CG;
-5. rigid missile and free nodes advanced; held nodes (crop) do not move — the impulse they
-   receive is accumulated so the momentum balance closes.
+1. rope forces, Eq. (1)–(4), with the package's one segment mapper ``net.forces.spring_force``;
+   a segment whose elastic stretch exceeds its breaking stretch is removed (rope failure), its
+   elastic and contact energy booked as released;
+2. capsule contact (``missile.shapes``): every rope segment is a capsule of the rope radius r,
+   every fin a rounded plate (core polygon swept by its half-thickness h/2), the body of
+   revolution as it is. For each (segment, part) pair the closest pair (p on the segment at
+   parameter s, q on the part's core) gives the gap g = |p − q| − r − h/2 (body: its signed
+   distance − r), the penetration δ = −g and the normal n = (p − q)/|p − q| (body: outward
+   surface normal). The elastic force derives from the potential U(δ) = K δ^(m+1)/(m+1)
+   (Eq. (28), K from Eq. (30) per part kind); because p minimises the distance over the segment,
+   ∂U/∂x_i = −(1 − s) F n and ∂U/∂x_j = −s F n (envelope theorem), so applying (1 − s, s) × F n
+   to the nodes and −F n at q to the missile (with its torque) is exactly the gradient of the
+   stored energy: the contact neither creates nor loses energy beyond the step error;
+3. Hunt–Crossley damping, Eq. (29): F_n = K δ^m (1 + χ δ̇), χ = damp_c / v_k, with v_k the
+   LARGEST approach speed seen in the current contact (≥ v_floor). So χ δ̇ ≤ damp_c while
+   approaching: the damping force never exceeds damp_c × the elastic force, whatever part the
+   contact slides to. Friction Eq. (32), regularised (``contact.law``);
+4. a centre line that reaches a part's core (fin: crosses the core polygon; body: enters the
+   solid) is tunnelling: the call stops with status TUNNEL unless the model allows it, in which
+   case that pair gets no force and the skipped impulse (effective mass × relative speed at the
+   crossing's first step) is accumulated;
+5. missile and free nodes advanced; held nodes (crop) keep still, the impulse they receive is
+   accumulated so the momentum balance closes.
 
-The missile's shapes come as the tuple ``shape`` of ``missile.shapes.pack_shapes`` (B frame);
-a broad phase (bounding cylinder, body radius, fin-plane slabs) keeps the exact distance
-functions to the few points that can touch.
+A fin's core is its contact polygon (root extended into the body, ``missile.shapes``); a closest
+core point inside the body's radius is ignored — the body contact holds the rope there.
 """
 
 from __future__ import annotations
+
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
 
 from flexnet_fe.collide.fpu import FTZ_DAZ, get_mxcsr, set_mxcsr
+from flexnet_fe.collide.model import (A_BROKEN, A_CROSS, A_DISS_CONTACT, A_DISS_FRICTION, A_DISS_ROPE, A_FCONTACT,
+                                      A_IMP_B, A_NBROKEN, A_NCONTACT, A_PEN, A_PEN_INT, A_PEN_RATIO, A_PHELD,
+                                      A_SKIPPED, A_TUN_PART, A_TUN_SPEED, A_TUN_STEP, A_WORK_GRAVITY, NONFINITE, OK,
+                                      TUNNEL)
 from flexnet_fe.collide.rigid_body import rigid_step
-from flexnet_fe.contact.law import contact_potential, friction_force, hysteresis_factor, normal_force
-from flexnet_fe.missile.shapes import body_closest_point, fin_closest_point, segment_fin_contact
-from flexnet_fe.net.forces import rope_tension
+from flexnet_fe.contact.law import approach_speed, contact_potential, friction_force, normal_force
+from flexnet_fe.missile.shapes import FIN_PART_OFFSET, segment_body_closest, segment_core_closest
+from flexnet_fe.net.forces import rope_elastic_energy, spring_force
 from flexnet_fe.rigid import quat_to_matrix
 
-# -- indices into the float parameter vector ``par`` -------------------------------------------
-P_KN, P_EXP, P_E, P_MU, P_VREG, P_RROPE, P_TUNNEL, P_GX, P_GY, P_GZ, P_MMASS, P_VKMIN = range(12)
-N_PAR = 12
-# -- indices into the int parameter vector ``ipar`` --------------------------------------------
-I_DAMP, I_NDET, I_SEGTEST, I_ALLOW = range(4)
-N_IPAR = 4
-# -- accumulators ``acc`` (float64), summed over the whole run unless said otherwise -----------
-A_DISS_ROPE = 0  # energy dissipated by rope damping [J]
-A_DISS_CONTACT = 1  # energy dissipated by contact damping [J]
-A_DISS_FRICTION = 2  # energy dissipated by friction [J]
-A_WORK_GRAVITY = 3  # work of gravity on net + missile [J]
-A_PHELD = 4  # impulse received by held nodes, 3 components [N s] (4, 5, 6)
-A_MAXPEN = 7  # largest penetration of the run [m]
-A_MAXRATIO = 8  # largest (centre-line depth inside the part) / tunnelling limit of the run [-]
-A_PEN_INT = 9  # largest penetration within the current call [m]
-A_FB = 10  # Σ R^T F dt over the call, F the total force on the missile [N s] (10, 11, 12)
-A_NCONTACT = 13  # largest number of simultaneous contacts within the call
-A_SEGCROSS = 14  # segment/fin crossings measured but not resolved by a force (test off, or first seen too deep)
-A_FCONTACT = 15  # Σ |F_contact| dt over the call [N s]
-A_RATIO_PART = 16  # part id where the largest depth/limit ratio occurred
-A_RATIO_SEG = 17  # 1 if that was a segment-test contact, else 0
-A_RATIO_AT = 18  # where (B frame [m], 3 components 18..20) the largest ratio occurred
-N_ACC = 21
-# -- status codes -------------------------------------------------------------------------------
-OK, TUNNEL, NONFINITE, EVENT_OVERFLOW = 0, 1, 2, 3
+
+@njit(cache=True)
+def _rv(r, a0, a1, a2):
+    """R a for R (3, 3) and a = (a0, a1, a2): three floats."""
+    return (r[0, 0] * a0 + r[0, 1] * a1 + r[0, 2] * a2, r[1, 0] * a0 + r[1, 1] * a1 + r[1, 2] * a2,
+            r[2, 0] * a0 + r[2, 1] * a1 + r[2, 2] * a2)
 
 
 @njit(cache=True)
-def rope_elastic_energy(length, rest_length, stiffness, offset):
-    """Elastic energy ½ K max(l − (l0 − offset), 0)² [J] of one segment (the potential of
-    ``net.forces.rope_tension``'s spring part)."""
-    stretch = length - (rest_length - offset)
-    return 0.5 * stiffness * stretch * stretch if stretch > 0.0 else 0.0
+def _rtv(r, a0, a1, a2):
+    """Rᵀ a: three floats."""
+    return (r[0, 0] * a0 + r[1, 0] * a1 + r[2, 0] * a2, r[0, 1] * a0 + r[1, 1] * a1 + r[2, 1] * a2,
+            r[0, 2] * a0 + r[1, 2] * a1 + r[2, 2] * a2)
+
+
+class StepWork(NamedTuple):
+    """Scratch of one step (allocated once per call): r (3, 3) attitude B → W; w_w [rad/s] (3,)
+    missile rate in W; f [N] (n, 3) forces on the nodes; fmt (6,) force [N] and torque about the
+    CG [N m] on the missile, W; pbn [m] (n, 3) node positions in B; nb (3,) contact normal and
+    qb [m] (3,) contact point of the current pair, B."""
+
+    r: np.ndarray
+    w_w: np.ndarray
+    f: np.ndarray
+    fmt: np.ndarray
+    pbn: np.ndarray
+    nb: np.ndarray
+    qb: np.ndarray
 
 
 @njit(cache=True)
-def rope_force(x, v, i, j, rest, k, c, off, fij):
-    """Force of the rope segment i–j on node i [N] into ``fij`` (3,) with
-    ``net.forces.rope_tension`` (Eq. (1)–(4), tension only, LINK167 offset ``off`` [m]);
-    x, v [m, m/s] (n, 3). Returns (T [N], dissipated power [W]): the power of the rope force
-    minus the rate of its elastic energy, (T − K·stretch)·l̇ (≥ 0 also when a fast shortening
-    sets T = 0)."""
-    d0 = x[j, 0] - x[i, 0]
-    d1 = x[j, 1] - x[i, 1]
-    d2 = x[j, 2] - x[i, 2]
-    ln = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-    stretch = ln - (rest - off)
-    if stretch <= 0.0 or ln == 0.0:
-        return 0.0, 0.0
-    u0, u1, u2 = d0 / ln, d1 / ln, d2 / ln
-    ldot = (v[j, 0] - v[i, 0]) * u0 + (v[j, 1] - v[i, 1]) * u1 + (v[j, 2] - v[i, 2]) * u2
-    t = rope_tension(ln, rest, k, c, off, ldot)
-    fij[0] = t * u0
-    fij[1] = t * u1
-    fij[2] = t * u2
-    return t, (t - k * stretch) * ldot
+def _work(n):
+    return StepWork(np.eye(3), np.zeros(3), np.zeros((n, 3)), np.zeros(6), np.zeros((n, 3)), np.zeros(3),
+                    np.zeros(3))
 
 
 @njit(cache=True)
-def _mat_vec(r, a, out):
-    """out = R a for R (3, 3), a (3,) (explicit: no BLAS call for 3 × 3)."""
-    for k in range(3):
-        out[k] = r[k, 0] * a[0] + r[k, 1] * a[1] + r[k, 2] * a[2]
+def _to_body(model, state, wk):
+    """Node positions in B [m] into wk.pbn (n, 3); wk.r must hold the attitude."""
+    r, pbn = wk.r, wk.pbn
+    for i in range(state.x.shape[0]):
+        b0, b1, b2 = _rtv(r, state.x[i, 0] - state.mx[0], state.x[i, 1] - state.mx[1], state.x[i, 2] - state.mx[2])
+        pbn[i, 0] = b0 + model.cg_b[0]
+        pbn[i, 1] = b1 + model.cg_b[1]
+        pbn[i, 2] = b2 + model.cg_b[2]
 
 
 @njit(cache=True)
-def _mat_t_vec(r, a, out):
-    """out = Rᵀ a for R (3, 3), a (3,)."""
-    for k in range(3):
-        out[k] = r[0, k] * a[0] + r[1, k] * a[1] + r[2, k] * a[2]
+def _near_missile(model, pa, pb):
+    """Broad phase: can the capsule a–b [m] (B) reach the missile's bounding cylinder?"""
+    rad = model.rope_radius
+    bb = model.bbox
+    if max(pa[0], pb[0]) < bb[0] - rad or min(pa[0], pb[0]) > bb[1] + rad:
+        return False
+    lab = np.sqrt((pb[0] - pa[0]) ** 2 + (pb[1] - pa[1]) ** 2 + (pb[2] - pa[2]) ** 2)
+    rmin = min(np.sqrt(pa[1] ** 2 + pa[2] ** 2), np.sqrt(pb[1] ** 2 + pb[2] ** 2))
+    return rmin - lab <= bb[2] + rad
 
 
 @njit(cache=True)
-def _candidate(pb, rr, rad, r_body, fin_planes):
-    """Broad phase without allocation: can a point at pb [m] (B) with contact radius ``rad`` touch
-    the body (within r_body + rad of the axis; rr its squared axis distance) or a fin (within its
-    half-thickness + rad of the fin's plane, inside its x range ± rad)?"""
-    if rr <= (r_body + rad) ** 2:
-        return True
-    for fi in range(fin_planes.shape[0]):
-        if fin_planes[fi, 4] - rad <= pb[0] <= fin_planes[fi, 5] + rad:
-            dn = pb[0] * fin_planes[fi, 0] + pb[1] * fin_planes[fi, 1] + pb[2] * fin_planes[fi, 2] - fin_planes[fi, 3]
-            if abs(dn) <= fin_planes[fi, 6] + rad:
-                return True
-    return False
+def _axis_distance(pa, pb):
+    """Smallest distance [m] of the segment a–b (B) from the missile axis x_b (closed form)."""
+    dy, dz = pb[1] - pa[1], pb[2] - pa[2]
+    ll = dy * dy + dz * dz
+    s = 0.0 if ll == 0.0 else min(max(-(pa[1] * dy + pa[2] * dz) / ll, 0.0), 1.0)
+    return np.sqrt((pa[1] + s * dy) ** 2 + (pa[2] + s * dz) ** 2)
 
 
 @njit(cache=True)
-def _closest(pb, rr, rad, r_body, fin_planes, shape):
-    """``missile.shapes.closest_point`` restricted to the parts a point of contact radius ``rad``
-    [m] can touch: the body of revolution only if the point is within r_body + rad of the axis
-    (rr = its squared distance from the axis), a fin only if the point is within its half-thickness
-    + rad of the fin's plane and inside its x range (± rad). Exact whenever the true distance is
-    below ``rad``; otherwise it returns a distance ≥ rad (no contact) or +inf."""
-    best = np.inf
-    nb = np.zeros(3)
-    sb = np.zeros(3)
-    part = -1
-    if rr <= (r_body + rad) ** 2:
-        best, nb, sb, part = body_closest_point(pb, shape[0], shape[1], shape[2])
-    for fi in range(fin_planes.shape[0]):
-        fp = fin_planes[fi]
-        if fp[4] - rad <= pb[0] <= fp[5] + rad:
-            dn = pb[0] * fp[0] + pb[1] * fp[1] + pb[2] * fp[2] - fp[3]
-            if abs(dn) <= fp[6] + rad:
-                d, n_, q_ = fin_closest_point(pb, shape[3][fi], shape[4][fi], shape[5][fi], shape[6][fi])
-                if d < best:
-                    best, nb, sb, part = d, n_, q_, shape[7][fi]
-    return best, nb, sb, part
+def _near_fin(model, fi, pa, pb):
+    """Broad phase: can the capsule a–b (B) touch fin fi's rounded plate (plane slab, x range)?"""
+    fp = model.fin_planes[fi]
+    rad = model.rope_radius + fp[6]
+    if max(pa[0], pb[0]) < fp[4] - rad or min(pa[0], pb[0]) > fp[5] + rad:
+        return False
+    da = pa[0] * fp[0] + pa[1] * fp[1] + pa[2] * fp[2] - fp[3]
+    db = pb[0] * fp[0] + pb[1] * fp[1] + pb[2] * fp[2] - fp[3]
+    return da * db <= 0.0 or min(abs(da), abs(db)) <= rad
 
 
 @njit(cache=True)
-def _segment_near_fin_plane(a, b, fin_planes):
-    """Broad phase of the segment test: does segment a–b [m] (B) overlap some fin's x range and
-    touch or cross its plane slab?"""
-    for fi in range(fin_planes.shape[0]):
-        fp = fin_planes[fi]
-        if max(a[0], b[0]) < fp[4] or min(a[0], b[0]) > fp[5]:
+def _apply(model, state, wk, slot, fin, delta, s, dt):
+    """Force of one (segment, part) contact on the net and the missile, Eq. (28), (29), (32).
+
+    slot: contact slot (segment e = slot // (1 + nf)); fin: fin index or −1 (body); delta [m] > 0
+    penetration; s segment parameter; wk.nb (3,) unit normal (towards the rope) and wk.qb [m]
+    (3,) missile contact point, in B. Adds the force to wk.f (weights 1 − s, s on the segment's
+    nodes) and its reaction to wk.fmt (missile force, torque about the CG, W); books the
+    dissipation; fin ≥ 0: adds the impulse to the fin-load slot. Returns |F| [N]."""
+    v, mv = state.v, state.mv
+    r, w_w, f, fmt, nb, qb = wk.r, wk.w_w, wk.f, wk.fmt, wk.nb, wk.qb
+    e = slot // (model.fin_half.shape[0] + 1)
+    i, j = model.seg[e, 0], model.seg[e, 1]
+    kk = model.k_fin if fin >= 0 else model.k_body
+    nw0, nw1, nw2 = _rv(r, nb[0], nb[1], nb[2])
+    l0, l1, l2 = _rv(r, qb[0] - model.cg_b[0], qb[1] - model.cg_b[1], qb[2] - model.cg_b[2])
+    w = 1.0 - s
+    vr0 = w * v[i, 0] + s * v[j, 0] - mv[0] - (w_w[1] * l2 - w_w[2] * l1)
+    vr1 = w * v[i, 1] + s * v[j, 1] - mv[1] - (w_w[2] * l0 - w_w[0] * l2)
+    vr2 = w * v[i, 2] + s * v[j, 2] - mv[2] - (w_w[0] * l1 - w_w[1] * l0)
+    vn = vr0 * nw0 + vr1 * nw1 + vr2 * nw2
+    ddot = -vn
+    vk = approach_speed(state.vk[slot], ddot, model.v_floor)
+    state.vk[slot] = vk
+    fel = kk * delta ** model.exponent
+    fn = normal_force(delta, ddot, kk, model.exponent, model.damp_c / vk)
+    vt0, vt1, vt2 = vr0 - vn * nw0, vr1 - vn * nw1, vr2 - vn * nw2
+    ft0, ft1, ft2 = friction_force(fn, model.mu, vt0, vt1, vt2, model.v_reg)
+    f0, f1, f2 = fn * nw0 + ft0, fn * nw1 + ft1, fn * nw2 + ft2
+    if model.free[i]:
+        f[i, 0] += w * f0
+        f[i, 1] += w * f1
+        f[i, 2] += w * f2
+    else:
+        for k, fk in enumerate((f0, f1, f2)):
+            state.acc[A_PHELD + k] += w * fk * dt
+    if model.free[j]:
+        f[j, 0] += s * f0
+        f[j, 1] += s * f1
+        f[j, 2] += s * f2
+    else:
+        for k, fk in enumerate((f0, f1, f2)):
+            state.acc[A_PHELD + k] += s * fk * dt
+    fmt[0] -= f0
+    fmt[1] -= f1
+    fmt[2] -= f2
+    fmt[3] -= l1 * f2 - l2 * f1
+    fmt[4] -= l2 * f0 - l0 * f2
+    fmt[5] -= l0 * f1 - l1 * f0
+    state.acc[A_DISS_CONTACT] += (fn - fel) * ddot * dt
+    state.acc[A_DISS_FRICTION] -= (ft0 * vt0 + ft1 * vt1 + ft2 * vt2) * dt
+    fmag = np.sqrt(f0 * f0 + f1 * f1 + f2 * f2)
+    state.acc[A_FCONTACT] += fmag * dt
+    if fin >= 0 and fmag > 0.0:  # (a contact in restitution may carry no force: F_n ≥ 0 clamp)
+        fs = slot // (model.fin_half.shape[0] + 1) * model.fin_half.shape[0] + fin
+        if state.fin_w[fs] == 0.0:
+            state.touched[state.ntouched[0]] = fs
+            state.ntouched[0] += 1
+        b0, b1, b2 = _rtv(r, f0, f1, f2)
+        state.fin_imp[fs, 0] -= b0 * dt
+        state.fin_imp[fs, 1] -= b1 * dt
+        state.fin_imp[fs, 2] -= b2 * dt
+        for k in range(3):
+            state.fin_pt[fs, k] += fmag * dt * qb[k]
+        state.fin_w[fs] += fmag * dt
+    return fmag
+
+
+@njit(cache=True)
+def _tunnel(model, state, slot, part, s, step):
+    """Book a centre line that reached part ``part``'s core (tunnelling) at segment parameter s.
+    The impulse a contact would have had to deliver to stop it, m_eff |v_rel| (m_eff =
+    (1 − s) m_i + s m_j, v_rel its velocity relative to the missile's CG), is booked as skipped
+    at the crossing's first step. Returns TUNNEL unless allowed."""
+    state.acc[A_CROSS] += 1.0
+    if state.vk[slot] >= 0.0:
+        e = slot // (model.fin_half.shape[0] + 1)
+        i, j = model.seg[e, 0], model.seg[e, 1]
+        w = 1.0 - s
+        v2 = 0.0
+        for k in range(3):
+            v2 += (w * state.v[i, k] + s * state.v[j, k] - state.mv[k]) ** 2
+        state.acc[A_SKIPPED] += (w * model.mass[i] + s * model.mass[j]) * np.sqrt(v2)
+        if state.acc[A_CROSS] == 1.0:
+            state.acc[A_TUN_PART] = part
+            state.acc[A_TUN_SPEED] = np.sqrt(v2)
+            state.acc[A_TUN_STEP] = step
+    state.vk[slot] = -1.0
+    return OK if model.allow_tunnel else TUNNEL
+
+
+@njit(cache=True)
+def segment_contacts(model, state, wk, e, dt, apply, step):
+    """All contacts of capsule e (ends wk.pbn[i], wk.pbn[j] in B) with the missile's parts.
+
+    apply: add forces (``_apply``) and update the contact slots; otherwise only measure.
+    Returns (stored contact energy Σ U(δ) [J], status, number of contacts)."""
+    nf = model.fin_half.shape[0]
+    base = e * (1 + nf)
+    pa, pb = wk.pbn[model.seg[e, 0]], wk.pbn[model.seg[e, 1]]
+    rad = model.rope_radius
+    energy = 0.0
+    ncon = 0
+    nb, qb = wk.nb, wk.qb
+    # body of revolution (one convex solid: body + nose)
+    if _axis_distance(pa, pb) <= model.bbox[3] + rad:
+        d, s, nb[0], nb[1], nb[2], qb[0], qb[1], qb[2], part = segment_body_closest(
+            pa, pb, model.prof_kind, model.prof_data, model.prof_part)
+        delta = rad - d
+        if d <= 0.0:
+            if apply and _tunnel(model, state, base, part, s, step) == TUNNEL:
+                return energy, TUNNEL, ncon
+        elif delta > 0.0:
+            energy += contact_potential(delta, model.k_body, model.exponent)
+            ncon += 1
+            if apply:
+                _apply(model, state, wk, base, -1, delta, s, dt)
+                _book_penetration(state, delta, delta / rad)
+        elif apply:
+            state.vk[base] = 0.0
+    elif apply:
+        state.vk[base] = 0.0
+    for fi in range(nf):
+        slot = base + 1 + fi
+        if not _near_fin(model, fi, pa, pb):
+            if apply:
+                state.vk[slot] = 0.0
             continue
-        da = a[0] * fp[0] + a[1] * fp[1] + a[2] * fp[2] - fp[3]
-        db = b[0] * fp[0] + b[1] * fp[1] + b[2] * fp[2] - fp[3]
-        if da * db <= 0.0 or min(abs(da), abs(db)) <= fp[6]:
-            return True
-    return False
+        dist, s, qu, qv, crossed = segment_core_closest(pa, pb, model.fin_origin[fi], model.fin_axes[fi],
+                                                        model.fin_poly[fi])
+        ax = model.fin_axes[fi]
+        for k in range(3):
+            qb[k] = model.fin_origin[fi, k] + qu * ax[0, k] + qv * ax[1, k]
+        if qb[1] * qb[1] + qb[2] * qb[2] < model.bbox[3] * model.bbox[3]:
+            if apply:  # the core point is inside the body: the body contact holds the rope there
+                state.vk[slot] = 0.0
+            continue
+        half = model.fin_half[fi]
+        if crossed:
+            if apply and _tunnel(model, state, slot, FIN_PART_OFFSET + fi, s, step) == TUNNEL:
+                return energy, TUNNEL, ncon
+            continue
+        delta = rad + half - dist
+        if delta <= 0.0:
+            if apply:
+                state.vk[slot] = 0.0
+            continue
+        energy += contact_potential(delta, model.k_fin, model.exponent)
+        ncon += 1
+        if apply:
+            for k in range(3):
+                nb[k] = (pa[k] + s * (pb[k] - pa[k]) - qb[k]) / dist
+                qb[k] += half * nb[k]  # the fin's surface point under the rope
+            _apply(model, state, wk, slot, fi, delta, s, dt)
+            _book_penetration(state, delta, delta / (rad + half))
+    return energy, OK, ncon
 
 
 @njit(cache=True)
-def _contact_force(v_w, delta, nb, sb, idx, det_touch, det_chi, mx, mv, w_w, r, m_cg_b, par, ipar,
-                   f_out, c_w_out, fb_out, tmp):
-    """Force of one contact, Eq. (28)–(29) and (32), given its geometry.
-
-    v_w [m/s] (3,) velocity of the net point in W; delta [m] > 0 penetration; nb (3,) outward
-    surface normal and sb [m] (3,) surface point, in B; idx its contact slot (first-touch state:
-    det_touch, det_chi). Writes the force ON THE NET POINT [N] into f_out (W), the surface point
-    into c_w_out (W) and the force ON THE MISSILE in B into fb_out; tmp (4, 3) scratch.
-    Returns (normal-damping power [W], friction power [W]) dissipated."""
-    nw = tmp[0]
-    vrel = tmp[1]
-    vt = tmp[2]
-    ft = tmp[3]
-    _mat_vec(r, nb, nw)
-    for k in range(3):
-        c_w_out[k] = sb[k] - m_cg_b[k]
-    _mat_vec(r, c_w_out, vt)  # lever arm from the CG, W
-    for k in range(3):
-        c_w_out[k] = mx[k] + vt[k]
-    # velocity of the net point relative to the missile material point under it
-    vrel[0] = v_w[0] - mv[0] - (w_w[1] * vt[2] - w_w[2] * vt[1])
-    vrel[1] = v_w[1] - mv[1] - (w_w[2] * vt[0] - w_w[0] * vt[2])
-    vrel[2] = v_w[2] - mv[2] - (w_w[0] * vt[1] - w_w[1] * vt[0])
-    vn = vrel[0] * nw[0] + vrel[1] * nw[1] + vrel[2] * nw[2]
-    ddot = -vn  # penetration rate
-    if not det_touch[idx]:
-        det_touch[idx] = True
-        # v_k: approach speed at first touch, Eq. (29). χ ∝ 1/v_k: a contact that starts with
-        # (almost) no approach speed — a point sliding in from a neighbouring part — would get an
-        # unbounded χ and, hit fast later, an unbounded damping force. Below the case's
-        # ``damping_min_impact_speed`` the contact is therefore elastic (χ = 0): the models'
-        # restitution relations do not hold for such contacts anyway.
-        det_chi[idx] = hysteresis_factor(ipar[I_DAMP], par[P_E], ddot) if ddot > par[P_VKMIN] else 0.0
-    fn = normal_force(delta, ddot, par[P_KN], par[P_EXP], det_chi[idx])
-    fel = par[P_KN] * delta ** par[P_EXP]
-    for k in range(3):
-        vt[k] = vrel[k] - vn * nw[k]
-    friction_force(fn, par[P_MU], vt, par[P_VREG], ft)
-    for k in range(3):
-        f_out[k] = fn * nw[k] + ft[k]
-    _mat_t_vec(r, f_out, fb_out)
-    for k in range(3):
-        fb_out[k] = -fb_out[k]
-    p_damp = (fn - fel) * ddot  # ≥ 0 while the damping force opposes the penetration rate
-    p_fric = -(ft[0] * vt[0] + ft[1] * vt[1] + ft[2] * vt[2])
-    return p_damp, p_fric
+def _book_penetration(state, delta, ratio):
+    if delta > state.acc[A_PEN]:
+        state.acc[A_PEN] = delta
+    if delta > state.acc[A_PEN_INT]:
+        state.acc[A_PEN_INT] = delta
+    if ratio > state.acc[A_PEN_RATIO]:
+        state.acc[A_PEN_RATIO] = ratio
 
 
 @njit(cache=True)
-def _fin_event(idx, part, fb, pb, dt, det_fin, det_imp, det_pt, det_w, ev_fin, ev_pt, ev_imp, ev_w, nev):
-    """Accumulate the impulse of contact ``idx`` on fin ``part − 2`` for the current interval
-    (flushing the old fin's sum into the event buffer if the contact moved to another fin).
-    Returns the new event count (−1 on overflow)."""
-    fin = part - 2
-    if det_fin[idx] >= 0 and det_fin[idx] != fin:
-        nev = _flush_one(idx, det_fin, det_imp, det_pt, det_w, ev_fin, ev_pt, ev_imp, ev_w, nev)
-        if nev < 0:
-            return nev
-    det_fin[idx] = fin
-    mag = np.sqrt(fb[0] * fb[0] + fb[1] * fb[1] + fb[2] * fb[2]) * dt
-    for k in range(3):
-        det_imp[idx, k] += fb[k] * dt
-        det_pt[idx, k] += mag * pb[k]
-    det_w[idx] += mag
-    return nev
+def _rope_forces(model, state, wk, dt):
+    """Rope tensions into wk.f (Eq. (1)–(4)); breaks segments past their breaking stretch."""
+    x, v, seg, f = state.x, state.v, model.seg, wk.f
+    for e in range(seg.shape[0]):
+        if not state.alive[e]:
+            continue
+        i, j = seg[e, 0], seg[e, 1]
+        t, u0, u1, u2, lf, ldot, stretch = spring_force(
+            x[j, 0] - x[i, 0], x[j, 1] - x[i, 1], x[j, 2] - x[i, 2], v[j, 0] - v[i, 0], v[j, 1] - v[i, 1],
+            v[j, 2] - v[i, 2], 0.0, model.rest[e], model.k[e], model.c[e], model.off[e])
+        if stretch > model.break_stretch[e]:
+            state.alive[e] = False
+            state.acc[A_NBROKEN] += 1.0
+            u_c, _, _ = segment_contacts(model, state, wk, e, dt, False, 0)
+            state.acc[A_BROKEN] += rope_elastic_energy(stretch, model.k[e]) + u_c
+            continue
+        if t > 0.0:
+            f[i, 0] += t * u0
+            f[i, 1] += t * u1
+            f[i, 2] += t * u2
+            f[j, 0] -= t * u0
+            f[j, 1] -= t * u1
+            f[j, 2] -= t * u2
+            state.acc[A_DISS_ROPE] += (t - model.k[e] * max(stretch, 0.0)) * ldot * dt
 
 
 @njit(cache=True)
-def _flush_one(idx, det_fin, det_imp, det_pt, det_w, ev_fin, ev_pt, ev_imp, ev_w, nev):
-    if nev >= ev_fin.shape[0]:
-        return -1
-    ev_fin[nev] = det_fin[idx]
-    for k in range(3):
-        ev_imp[nev, k] = det_imp[idx, k]
-        ev_pt[nev, k] = det_pt[idx, k] / det_w[idx] if det_w[idx] > 0.0 else 0.0
-        det_imp[idx, k] = 0.0
-        det_pt[idx, k] = 0.0
-    ev_w[nev] = det_w[idx]
-    det_w[idx] = 0.0
-    det_fin[idx] = -1
-    return nev + 1
+def _step_contacts(model, state, wk, dt, step):
+    """Contacts of all live segments near the missile. Returns (status, contacts)."""
+    nf = model.fin_half.shape[0]
+    ncon = 0
+    pbn = wk.pbn
+    for e in range(model.seg.shape[0]):
+        i, j = model.seg[e, 0], model.seg[e, 1]
+        if not state.alive[e] or not _near_missile(model, pbn[i], pbn[j]):
+            base = e * (1 + nf)
+            for p in range(1 + nf):
+                if state.vk[base + p] != 0.0:
+                    state.vk[base + p] = 0.0
+            continue
+        _, status, nc = segment_contacts(model, state, wk, e, dt, True, step)
+        ncon += nc
+        if status != OK:
+            return status, ncon
+    return OK, ncon
 
 
 @njit(cache=True)
-def _advance(n_steps, dt, x, v, node_mass, node_free, node_radius, seg, seg_rest, seg_k, seg_c, seg_off,
-            det_touch, det_chi, det_fin, det_imp, det_pt, det_w,
-            mx, mv, mq, mh, m_inv_inertia, m_cg_b, bbox, fin_planes, fin_limit,
-            par, ipar, shape, acc, ev_fin, ev_pt, ev_imp, ev_w):
-    """Advance net + missile ``n_steps`` steps of ``dt`` [s] in place. Returns (status, q, nev).
+def _integrate(model, state, wk, dt):
+    """Missile and free nodes one step (symplectic Euler); held nodes book their impulse."""
+    x, v, g, f, fmt = state.x, state.v, model.gravity, wk.f, wk.fmt
+    for k in range(3):
+        state.acc[A_WORK_GRAVITY] += model.m_mass * g[k] * state.mv[k] * dt
+    q = rigid_step(state.mx, state.mv, state.mq, state.mh, fmt[:3], fmt[3:], model.m_mass, model.inv_inertia, dt)
+    state.mq[:] = q
+    for i in range(x.shape[0]):
+        if model.free[i]:
+            a = dt / model.mass[i]
+            for k in range(3):
+                state.acc[A_WORK_GRAVITY] += model.mass[i] * g[k] * v[i, k] * dt
+                v[i, k] += a * f[i, k]
+                x[i, k] += dt * v[i, k]
+        else:
+            for k in range(3):
+                state.acc[A_PHELD + k] += f[i, k] * dt
 
-    Net: x, v [m, m/s] (n, 3) W; node_mass [kg] (n,); node_free (n,) bool; node_radius [m] (n,)
-    contact radius of each node (rope radius; hub radius for a rotary hub); seg (ns, 2) int64;
-    seg_rest [m], seg_k [N/m], seg_c [N s/m], seg_off [m] (ns,) (``NetModel`` fields). Only
-    segments with a free end are passed; segment points have the rope radius ``par[P_RROPE]``.
-    Contact state (one slot per detection point: n nodes, then ns × n_det segment points, then
-    ns segment-test slots): det_touch bool, det_chi [s/m]; fin impulse accumulators det_fin int,
-    det_imp [N s] (np, 3) in B, det_pt [N s m] (np, 3), det_w [N s] (np,).
-    Missile: mx, mv [m, m/s] (3,) CG in W; mq (4,) attitude; mh [kg m²/s] (3,) angular momentum
-    about the CG in W; m_inv_inertia (3, 3) in B; m_cg_b [m] (3,) CG in B; bbox (4,):
-    (x_min, x_max, r_max, r_body) bounding cylinder of all shapes and radius of the body of
-    revolution in B (each point's test grows them by the point's contact radius); fin_planes
-    (nfin, 7): per fin (n_x, n_y, n_z, n·origin, x_min, x_max, half-thickness) in B — a point
-    outside the body radius is tested only if it is within the half-thickness (+ radius) of a
-    fin's plane and inside its x range (broad phase; ``scene.fin_planes``).
-    fin_limit [m] (nfin,): tunnelling limit of each fin; the body's limit is ``par[P_TUNNEL] ×
-    rope radius``. Tunnelling = the rope's centre line inside a part deeper than its limit
-    (δ − contact radius > limit; for the segment test, its in-plane depth past the fin edge). acc: accumulators (``A_*``). Events (fin impulses flushed at
-    the end of the call): ev_fin, ev_pt [m] B, ev_imp [N s] B, ev_w [N s]; nev = their count.
-    status: OK, TUNNEL (penetration above the limit and not allowed), NONFINITE, EVENT_OVERFLOW.
-    """
-    n = x.shape[0]
-    ns = seg.shape[0]
-    ndet = ipar[I_NDET]
-    npts = n + ns * ndet
-    mmass = par[P_MMASS]
-    g = np.array([par[P_GX], par[P_GY], par[P_GZ]])
-    rrope = par[P_RROPE]
-    body_limit = par[P_TUNNEL] * rrope
-    f = np.zeros((n, 3))
-    pbn = np.zeros((n, 3))  # node positions in B
-    seg_near = np.zeros(ns, dtype=np.bool_)
-    fij = np.zeros(3)
-    fc = np.zeros(3)
-    cw = np.zeros(3)
-    fb = np.zeros(3)
-    pw = np.zeros(3)
-    vw = np.zeros(3)
-    pb = np.zeros(3)
-    pb_a = np.zeros(3)
-    pb_b = np.zeros(3)
-    tmp = np.zeros((4, 3))
-    hb = np.zeros(3)
-    w_b = np.zeros(3)
-    w_w = np.zeros(3)
-    fm = np.zeros(3)
-    tm = np.zeros(3)
-    q = mq.copy()
-    nev = 0
-    for k in range(A_FB, A_FB + 3):
-        acc[k] = 0.0
+
+@njit(cache=True)
+def _advance(model, state, n_steps, dt):
+    n = state.x.shape[0]
+    wk = _work(n)
+    f, fmt, w_w = wk.f, wk.fmt, wk.w_w
+    acc = state.acc
+    for k in range(3):
+        acc[A_IMP_B + k] = 0.0
     acc[A_PEN_INT] = 0.0
     acc[A_NCONTACT] = 0.0
     acc[A_FCONTACT] = 0.0
     for step in range(n_steps):
-        r = quat_to_matrix(q)
-        _mat_t_vec(r, mh, hb)
-        _mat_vec(m_inv_inertia, hb, w_b)
-        _mat_vec(r, w_b, w_w)
+        wk.r[:, :] = quat_to_matrix(state.mq)
+        r = wk.r
+        hb0, hb1, hb2 = _rtv(r, state.mh[0], state.mh[1], state.mh[2])
+        wb0, wb1, wb2 = _rv(model.inv_inertia, hb0, hb1, hb2)
+        w_w[0], w_w[1], w_w[2] = _rv(r, wb0, wb1, wb2)
         for k in range(3):
-            fm[k] = mmass * g[k]  # force on the missile, W
-            tm[k] = 0.0  # torque about the CG, W
+            fmt[k] = model.m_mass * model.gravity[k]
+            fmt[3 + k] = 0.0
         for i in range(n):
             for k in range(3):
-                f[i, k] = node_mass[i] * g[k]
-        # 1. rope springs, Eq. (1)–(4)
-        for e in range(ns):
-            i = seg[e, 0]
-            j = seg[e, 1]
-            t, pdiss = rope_force(x, v, i, j, seg_rest[e], seg_k[e], seg_c[e], seg_off[e], fij)
-            if t > 0.0:
-                for k in range(3):
-                    f[i, k] += fij[k]
-                    f[j, k] -= fij[k]
-                acc[A_DISS_ROPE] += pdiss * dt
-        # 2.–4. detection and contact. Broad phase: every node in B once per step, and a
-        # segment-level reject (all its points lie within |b − a| of either end)
-        for i in range(n):
-            for k in range(3):
-                pw[k] = x[i, k] - mx[k]
-            _mat_t_vec(r, pw, pb)
-            for k in range(3):
-                pbn[i, k] = pb[k] + m_cg_b[k]
-        for e in range(ns):
-            i = seg[e, 0]
-            j = seg[e, 1]
-            lab = np.sqrt((pbn[j, 0] - pbn[i, 0]) ** 2 + (pbn[j, 1] - pbn[i, 1]) ** 2 + (pbn[j, 2] - pbn[i, 2]) ** 2)
-            ra = np.sqrt(pbn[i, 1] ** 2 + pbn[i, 2] ** 2)
-            rb = np.sqrt(pbn[j, 1] ** 2 + pbn[j, 2] ** 2)
-            seg_near[e] = not (max(pbn[i, 0], pbn[j, 0]) < bbox[0] - rrope or min(pbn[i, 0], pbn[j, 0]) > bbox[1] + rrope
-                               or min(ra, rb) - lab > bbox[2] + rrope)
-        ncontact = 0
-        for idx in range(npts + ns):
-            if idx < n:
-                i = idx
-                if not node_free[i]:
-                    continue
-                j = i
-                s = 0.0
-            else:
-                e = (idx - n) // ndet if idx < npts else idx - npts
-                if not seg_near[e]:
-                    det_touch[idx] = False
-                    continue
-                i = seg[e, 0]
-                j = seg[e, 1]
-                s = ((idx - n) % ndet + 1.0) / (ndet + 1.0) if idx < npts else -1.0  # −1: segment test
-            if s >= 0.0:
-                for k in range(3):
-                    pb[k] = (1.0 - s) * pbn[i, k] + s * pbn[j, k]
-                # cheap reject: bounding cylinder of the missile in B, grown by the contact radius
-                rad = node_radius[i] if idx < n else rrope
-                rr = pb[1] * pb[1] + pb[2] * pb[2]
-                if pb[0] < bbox[0] - rad or pb[0] > bbox[1] + rad or rr > (bbox[2] + rad) ** 2:
-                    det_touch[idx] = False
-                    continue
-                if not _candidate(pb, rr, rad, bbox[3], fin_planes):
-                    det_touch[idx] = False
-                    continue
-                dist, nb, sb, part = _closest(pb, rr, rad, bbox[3], fin_planes, shape)
-                delta = rad - dist
-                if delta <= 0.0:
-                    det_touch[idx] = False
-                    continue
-                for k in range(3):
-                    vw[k] = (1.0 - s) * v[i, k] + s * v[j, k]
-                p_damp, p_fric = _contact_force(vw, delta, nb, sb, idx, det_touch, det_chi, mx, mv, w_w, r,
-                                                m_cg_b, par, ipar, fc, cw, fb, tmp)
-            else:
-                # 3. segment test against the thin fins
-                for k in range(3):
-                    pb_a[k] = pbn[i, k]
-                    pb_b[k] = pbn[j, k]
-                if (pb_a[0] < bbox[0] and pb_b[0] < bbox[0]) or (pb_a[0] > bbox[1] and pb_b[0] > bbox[1]):
-                    det_touch[idx] = False
-                    continue
-                # any point of the segment is at least min(r_a, r_b) − |b − a| from the axis
-                lab = np.sqrt((pb_b[0] - pb_a[0]) ** 2 + (pb_b[1] - pb_a[1]) ** 2 + (pb_b[2] - pb_a[2]) ** 2)
-                rmin = min(np.sqrt(pb_a[1] ** 2 + pb_a[2] ** 2), np.sqrt(pb_b[1] ** 2 + pb_b[2] ** 2))
-                if rmin - lab > bbox[2] or not _segment_near_fin_plane(pb_a, pb_b, fin_planes):
-                    det_touch[idx] = False
-                    continue
-                part, s, sb, depth, nb = segment_fin_contact(pb_a, pb_b, *shape)
-                if part < 0 or sb[1] * sb[1] + sb[2] * sb[2] < bbox[3] * bbox[3]:
-                    # no crossing, or only the chord of a rope wrapped on the body dipping through
-                    # the fin's root extension inside the body: the body's point contacts hold it
-                    det_touch[idx] = False
-                    continue
-                if ipar[I_SEGTEST] == 0 or (not det_touch[idx] and depth > fin_limit[part - 2]):
-                    # measured only: with the test off, or when the crossing is already deeper than
-                    # the tunnelling limit when first seen (the rope went through between two
-                    # steps or two detection points: no force can resolve it), it is tunnelling
-                    acc[A_SEGCROSS] += 1.0
-                    ratio = depth / fin_limit[part - 2]
-                    if ratio > acc[A_MAXRATIO]:
-                        acc[A_MAXRATIO] = ratio
-                        acc[A_RATIO_PART] = part
-                        acc[A_RATIO_SEG] = 1.0
-                        for k in range(3):
-                            acc[A_RATIO_AT + k] = sb[k]
-                    if ratio > 1.0 and ipar[I_ALLOW] == 0:
-                        return TUNNEL, q, nev
-                    continue
-                # the crossing point is pushed out along ``nb`` (over the nearest free edge, or out
-                # of the nearest face) with the penetration of the rope's CENTRE LINE, δ = depth:
-                # the force then starts from zero when the centre line first crosses the plate. (With
-                # the rope surface, δ = depth + r, it would start at K r^m — a jump of ~7 MN for the
-                # paper's rope under the penalty rule, which injects energy.) The rope's own radius at
-                # an edge is resolved by the detection points.
-                delta = depth
-                rad = 0.0
-                for k in range(3):
-                    vw[k] = (1.0 - s) * v[i, k] + s * v[j, k]
-                p_damp, p_fric = _contact_force(vw, delta, nb, sb, idx, det_touch, det_chi, mx, mv, w_w, r,
-                                                m_cg_b, par, ipar, fc, cw, fb, tmp)
-            # common: apply the contact force (point shared by its nodes with weights 1 − s, s)
-            ncontact += 1
-            if delta > acc[A_MAXPEN]:
-                acc[A_MAXPEN] = delta
-            if delta > acc[A_PEN_INT]:
-                acc[A_PEN_INT] = delta
-            # tunnelling measure: depth of the rope's centre line inside the part (δ − radius)
-            limit = fin_limit[part - 2] if part >= 2 else body_limit
-            ratio = (delta - rad) / limit
-            if ratio > acc[A_MAXRATIO]:
-                acc[A_MAXRATIO] = ratio
-                acc[A_RATIO_PART] = part
-                acc[A_RATIO_SEG] = 1.0 if idx >= npts else 0.0
-                for k in range(3):
-                    acc[A_RATIO_AT + k] = sb[k]
-            if ratio > 1.0 and ipar[I_ALLOW] == 0:
-                return TUNNEL, q, nev
-            wi = 1.0 - s
-            for k in range(3):
-                f[i, k] += wi * fc[k]
-                f[j, k] += s * fc[k]
-                fm[k] -= fc[k]
-            # torque of −fc at the surface point cw about the CG
-            lx = cw[0] - mx[0]
-            ly = cw[1] - mx[1]
-            lz = cw[2] - mx[2]
-            tm[0] -= ly * fc[2] - lz * fc[1]
-            tm[1] -= lz * fc[0] - lx * fc[2]
-            tm[2] -= lx * fc[1] - ly * fc[0]
-            acc[A_DISS_CONTACT] += p_damp * dt
-            acc[A_DISS_FRICTION] += p_fric * dt
-            acc[A_FCONTACT] += np.sqrt(fc[0] ** 2 + fc[1] ** 2 + fc[2] ** 2) * dt
-            if part >= 2:
-                nev = _fin_event(idx, part, fb, sb, dt, det_fin, det_imp, det_pt, det_w,
-                                 ev_fin, ev_pt, ev_imp, ev_w, nev)
-                if nev < 0:
-                    return EVENT_OVERFLOW, q, 0
-        if ncontact > acc[A_NCONTACT]:
-            acc[A_NCONTACT] = ncontact
-        # 5. integrate: missile, then free nodes (symplectic Euler); held nodes keep still
-        _mat_t_vec(r, fm, fb)
-        for k in range(3):
-            acc[A_FB + k] += fb[k] * dt
-            acc[A_WORK_GRAVITY] += mmass * g[k] * mv[k] * dt
-        q = rigid_step(mx, mv, q, mh, fm, tm, mmass, m_inv_inertia, dt)
-        for i in range(n):
-            if node_free[i]:
-                for k in range(3):
-                    acc[A_WORK_GRAVITY] += node_mass[i] * g[k] * v[i, k] * dt
-                    v[i, k] += dt * f[i, k] / node_mass[i]
-                    x[i, k] += dt * v[i, k]
-            else:
-                for k in range(3):
-                    acc[A_PHELD + k] += f[i, k] * dt
-        if not (np.isfinite(mx[0]) and np.isfinite(mv[2])):
-            return NONFINITE, q, nev
+                f[i, k] = model.mass[i] * model.gravity[k]
+        _to_body(model, state, wk)
+        _rope_forces(model, state, wk, dt)
+        status, ncon = _step_contacts(model, state, wk, dt, step)
+        if status != OK:
+            return status
+        if ncon > acc[A_NCONTACT]:
+            acc[A_NCONTACT] = ncon
+        g = model.gravity
+        b0, b1, b2 = _rtv(r, fmt[0] - model.m_mass * g[0], fmt[1] - model.m_mass * g[1], fmt[2] - model.m_mass * g[2])
+        acc[A_IMP_B] += b0 * dt
+        acc[A_IMP_B + 1] += b1 * dt
+        acc[A_IMP_B + 2] += b2 * dt
+        _integrate(model, state, wk, dt)
+        if not (np.isfinite(state.mx[0]) and np.isfinite(state.mv[2])):
+            return NONFINITE
     for i in range(n):
-        if not (np.isfinite(x[i, 0]) and np.isfinite(x[i, 1]) and np.isfinite(x[i, 2])):
-            return NONFINITE, q, nev
-    # flush the fin impulses of this interval
-    for idx in range(det_fin.shape[0]):
-        if det_fin[idx] >= 0:
-            nev = _flush_one(idx, det_fin, det_imp, det_pt, det_w, ev_fin, ev_pt, ev_imp, ev_w, nev)
-            if nev < 0:
-                return EVENT_OVERFLOW, q, 0
-    return OK, q, nev
+        if not (np.isfinite(state.x[i, 0]) and np.isfinite(state.x[i, 1]) and np.isfinite(state.x[i, 2])):
+            return NONFINITE
+    return OK
 
 
 @njit(cache=True)
-def advance(n_steps, dt, x, v, node_mass, node_free, node_radius, seg, seg_rest, seg_k, seg_c, seg_off,
-            det_touch, det_chi, det_fin, det_imp, det_pt, det_w,
-            mx, mv, mq, mh, m_inv_inertia, m_cg_b, bbox, fin_planes, fin_limit,
-            par, ipar, shape, acc, ev_fin, ev_pt, ev_imp, ev_w):
-    """:func:`_advance` with subnormal floats flushed to zero (``collide.fpu``); same arguments
-    and results. The caller's floating-point control register is restored on return."""
+def advance(model, state, n_steps, dt):
+    """Advance ``state`` (``model.CollideState``) in place by ``n_steps`` steps of ``dt`` [s]
+    under ``model`` (``model.CollideModel``). Returns the status OK, TUNNEL (a rope centre line
+    reached a part's core and the model does not allow it; ``state.acc[A_TUN_*]`` say where) or
+    NONFINITE. Subnormal floats are flushed to zero during the call (``collide.fpu``); the
+    caller's floating-point control register is restored on return."""
     old = get_mxcsr()
     set_mxcsr(old | np.uint32(FTZ_DAZ))
-    out = _advance(n_steps, dt, x, v, node_mass, node_free, node_radius, seg, seg_rest, seg_k, seg_c, seg_off,
-                   det_touch, det_chi, det_fin, det_imp, det_pt, det_w,
-                   mx, mv, mq, mh, m_inv_inertia, m_cg_b, bbox, fin_planes, fin_limit,
-                   par, ipar, shape, acc, ev_fin, ev_pt, ev_imp, ev_w)
+    status = _advance(model, state, n_steps, dt)
     set_mxcsr(old)
-    return out
+    return status
 
 
 @njit(cache=True)
-def net_energy(x, v, node_mass, node_free, seg, seg_rest, seg_k, seg_off):
-    """(kinetic [J], rope elastic [J]) of the net; held nodes are at rest."""
+def energies(model, state):
+    """(net kinetic, rope elastic, contact stored) [J] of the state; held nodes are at rest."""
+    x, v = state.x, state.v
     ke = 0.0
     for i in range(x.shape[0]):
-        if node_free[i]:
-            ke += 0.5 * node_mass[i] * (v[i, 0] ** 2 + v[i, 1] ** 2 + v[i, 2] ** 2)
+        if model.free[i]:
+            ke += 0.5 * model.mass[i] * (v[i, 0] ** 2 + v[i, 1] ** 2 + v[i, 2] ** 2)
     pe = 0.0
-    for e in range(seg.shape[0]):
-        i = seg[e, 0]
-        j = seg[e, 1]
-        d = np.sqrt((x[j, 0] - x[i, 0]) ** 2 + (x[j, 1] - x[i, 1]) ** 2 + (x[j, 2] - x[i, 2]) ** 2)
-        pe += rope_elastic_energy(d, seg_rest[e], seg_k[e], seg_off[e])
-    return ke, pe
-
-
-@njit(cache=True)
-def contact_energy(x, node_free, node_radius, seg, ndet, mx, mq, m_cg_b, bbox, fin_planes, par, shape):
-    """Elastic energy stored in the point contacts [J], Σ K_n δ^(m+1)/(m+1) (segment-test
-    contacts are not included: they are short-lived and their share is within the step error)."""
-    r = quat_to_matrix(mq)
-    n = x.shape[0]
-    e_c = 0.0
-    pw = np.zeros(3)
-    pb = np.zeros(3)
-    for idx in range(n + seg.shape[0] * ndet):
-        if idx < n:
-            if not node_free[idx]:
-                continue
-            i = idx
-            j = idx
-            s = 0.0
-        else:
-            e = (idx - n) // ndet
-            s = ((idx - n) % ndet + 1.0) / (ndet + 1.0)
-            i = seg[e, 0]
-            j = seg[e, 1]
-        for k in range(3):
-            pw[k] = (1.0 - s) * x[i, k] + s * x[j, k]
-        for k in range(3):
-            pb[k] = m_cg_b[k] + r[0, k] * (pw[0] - mx[0]) + r[1, k] * (pw[1] - mx[1]) + r[2, k] * (pw[2] - mx[2])
-        rad = node_radius[i] if idx < n else par[P_RROPE]
-        if pb[0] < bbox[0] - rad or pb[0] > bbox[1] + rad or pb[1] ** 2 + pb[2] ** 2 > (bbox[2] + rad) ** 2:
+    wk = _work(x.shape[0])
+    wk.r[:, :] = quat_to_matrix(state.mq)
+    _to_body(model, state, wk)
+    uc = 0.0
+    for e in range(model.seg.shape[0]):
+        if not state.alive[e]:
             continue
-        dist, nb, sb, part = _closest(pb, pb[1] ** 2 + pb[2] ** 2, rad, bbox[3], fin_planes, shape)
-        e_c += contact_potential(rad - dist, par[P_KN], par[P_EXP])
-    return e_c
+        i, j = model.seg[e, 0], model.seg[e, 1]
+        ln = np.sqrt((x[j, 0] - x[i, 0]) ** 2 + (x[j, 1] - x[i, 1]) ** 2 + (x[j, 2] - x[i, 2]) ** 2)
+        pe += rope_elastic_energy(ln - (model.rest[e] - model.off[e]), model.k[e])
+        if _near_missile(model, wk.pbn[i], wk.pbn[j]):
+            u, _, _ = segment_contacts(model, state, wk, e, 0.0, False, 0)
+            uc += u
+    return ke, pe, uc

@@ -26,11 +26,16 @@ def plot_all(res: CollisionResult, missile: Missile, cfg: CollideConfig, out_dir
     paths = []
 
     fig, ax = plt.subplots(figsize=(7, 4))  # Fig. 12(b), 15(a), 17(a)
-    for c in "xyz":
-        ax.plot(t_ms, h[f"accel_body_{c}_mps2"], lw=0.8, label=f"$a_{{{c}_b}}$")
-    ax.plot(t_ms, h["accel_mag_mps2"], "k", lw=1.0, label="|a|")
+    from flexnet_fe.collide.metrics import cfc_filter
+
+    ax.plot(t_ms[1:], h["accel_mag_mps2"][1:], color="0.7", lw=0.6,
+            label=f"|a| raw ({cfg.output_interval * 1e6:.0f} µs means)")
+    a_f = cfc_filter(h["t_s"][1:], np.column_stack([h[f"accel_body_{c}_mps2"][1:] for c in "xyz"]), cfg.cfc_class)
+    for k, c in enumerate("xyz"):
+        ax.plot(t_ms[1:], a_f[:, k], lw=0.8, label=f"$a_{{{c}_b}}$ CFC {cfg.cfc_class:g}")
+    ax.plot(t_ms[1:], np.linalg.norm(a_f, axis=1), "k", lw=1.0, label=f"|a| CFC {cfg.cfc_class:g}")
     ax.set_xlabel("t [ms]")
-    ax.set_ylabel(f"CG acceleration, body axes [m/s²] (mean over {cfg.output_interval * 1e6:.0f} µs)")
+    ax.set_ylabel("CG acceleration, body axes [m/s²]")
     ax.set_title(title)
     ax.legend()
     ax.grid(alpha=0.3)

@@ -19,6 +19,7 @@ from flexnet_fe.errors import CaseError, FlexnetError
 from flexnet_fe.missile.geometry import Missile
 from flexnet_fe.missile.shapes import ShapeArrays
 from flexnet_fe.net.deploy import build_net
+from flexnet_fe.net.forces import RopeMaterial, rope_material
 from flexnet_fe.net.topology import NetModel
 from flexnet_fe.rigid import quat_from_matrix
 
@@ -28,16 +29,12 @@ class HeldNet:
     """The net of the impact (data). model: its ``NetModel`` (topology, masses, springs);
     x [m] (n, 3) held positions in W (velocities are zero); rest_length [m] (m,) rest lengths used
     in the impact (hub links measured from the hub centre, see :func:`held_net`);
-    node_radius [m] (n,) contact radius of each node; rope_radius [m]; rope_modulus E [Pa] and
-    rope_density ρ [kg/m³] of the rope material; source: where x came from."""
+    rope: the rope material (capsule radius = rope radius); source: where x came from."""
 
     model: NetModel
     x: np.ndarray
     rest_length: np.ndarray
-    node_radius: np.ndarray
-    rope_radius: float
-    rope_modulus: float
-    rope_density: float
+    rope: RopeMaterial
     source: NetSource
 
 
@@ -62,7 +59,8 @@ def held_net(net_cfg, source: NetSource, deploy_dir: Path | None) -> HeldNet:
 
     Rotary hub (departs from the deploy model): during the ~10 ms impact the hub is a point mass
     that does not spin; its links are springs from the hub centre with rest length l0 + r0 (the
-    rim anchor rigidly attached), and the hub node's contact radius is the hub radius r0.
+    rim anchor rigidly attached). Its links touch the missile as rope capsules; the hub disc's own
+    contact is not modelled (the paper's cases aim off the hub).
     """
     model = build_net(net_cfg)
     if source is NetSource.flat_taut:
@@ -82,14 +80,10 @@ def held_net(net_cfg, source: NetSource, deploy_dir: Path | None) -> HeldNet:
     else:
         raise ValueError(f"unknown net source {source!r}")
     x -= x.mean(axis=0)
-    rope_radius = 0.5 * float(np.max(model.diameter))
-    node_radius = np.full(model.n_nodes, rope_radius)
     rest = np.array(model.rest_length, dtype=np.float64)
     if model.hub_node >= 0:
-        node_radius[model.hub_node] = model.hub_radius
         rest[model.hub_link] += model.hub_radius
-    return HeldNet(model, x, rest, node_radius, rope_radius, float(net_cfg.youngs_modulus),
-                   float(net_cfg.density), source)
+    return HeldNet(model, x, rest, rope_material(net_cfg), source)
 
 
 def shape_bbox(missile: Missile) -> np.ndarray:

@@ -4,8 +4,9 @@ Files written
     history.csv        one row per output interval (t_s = interval end): missile CG acceleration in
                        body axes (mean over the interval) and its magnitude, body rates and angular
                        accelerations, world velocity, speed change, pitch/yaw/roll change (rotation
-                       about world x, y, z since t = 0, paper Fig. 13), contacts, penetration, energy
-                       and momentum balance terms
+                       about world x, y, z since t = 0, paper Fig. 13), contacts, penetration, broken
+                       segments, momentum of missile / net / held nodes (W) and every energy term
+                       (columns ending in _j, with energy_balance_j; see ``simulate``)
     fin_contacts.npz   (allow_pickle=False) per-fin contact loads for the shell stage, EXACTLY:
                        fin_names (nf,) unicode; t [s] (nt,) sample times (interval midpoints);
                        row_start (nt+1,) int64 CSR offsets (events of sample k are rows
@@ -52,18 +53,18 @@ def run_collide(net_cfg, deploy_cfg, missile_cfg: MissileConfig, collide_cfg: Co
              "aim (%.3g, %.3g) m", net.model.kind, net.source.value, net.model.n_nodes, missile.name,
              missile.mass, collide_cfg.impact_speed, collide_cfg.incidence_angle, *collide_cfg.aim_point)
     res = simulate(net, missile, collide_cfg, air.gravity, log)
-    write_outputs(res, net.model.springs, net.rest_length, net.model.stiffness_ea / net.model.rest_length,
-                  missile, stage_dir)
+    write_outputs(res, net.model.springs[res.alive], net.rest_length[res.alive],
+                  (net.model.stiffness_ea / net.model.rest_length)[res.alive], missile, stage_dir)
     from flexnet_fe.collide.plots import plot_all
 
     plot_all(res, missile, collide_cfg, stage_dir, title=f"{missile.name} missile vs {net.model.kind} net")
     s = res.summary
     log.info("collide: peak |a| = %.4g m/s² at %.4g s, |Δv|/v = %.3g, attitude change %.3g rad, contact "
-             "duration %.4g s, %s, max penetration %.3g m, momentum error %.2g, energy error %.2g, %d steps "
-             "of %.3g s in %.1f s", s["peak_accel_mps2"], s["peak_accel_time_s"], s["dv_over_v"],
+             "duration %.4g s, %s, max penetration %.3g m, momentum error %.2g, energy error %.2g, %d broken "
+             "segments, %d steps of %.3g s in %.1f s", s["peak_accel_mps2"], s["peak_accel_time_s"], s["dv_over_v"],
              s["max_attitude_change_rad"], s["duration_s"],
              "passed through" if s["passed_through"] else "net carried forward / still in contact",
-             s["max_penetration_m"], s["momentum_error_rel"], s["energy_error_rel"], s["steps"], s["dt_s"],
+             s["max_penetration_m"], s["momentum_error_rel"], s["energy_error_rel"], s["broken_segments"], s["steps"], s["dt_s"],
              s["wall_s"])
     return s
 

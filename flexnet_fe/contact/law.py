@@ -21,7 +21,7 @@ from flexnet_fe.contact.models import DAMPING_CODE, DampingModel  # noqa: F401  
 
 @njit(cache=True)
 def hysteresis_factor(model_code, restitution, v_k):
-    """Damping factor χ [s/m] of a contact that started with approach speed ``v_k`` [m/s] > 0.
+    """Damping factor χ [s/m] of a contact with approach speed ``v_k`` [m/s] > 0 (``approach_speed``).
 
     model_code: ``DAMPING_CODE[model]``; restitution e ∈ (0, 1]. Eq. (29) for Lankarani–Nikravesh.
     Raises ValueError for an unknown code or v_k <= 0 (a contact that starts at rest has no
@@ -63,22 +63,34 @@ def contact_potential(delta, k_n, exponent):
 
 
 @njit(cache=True)
-def friction_force(f_n, mu, v_t, v_reg, out):
+def approach_speed(v_k, delta_dot, v_floor):
+    """The speed v_k [m/s] that sets χ = c/v_k in Eq. (29), updated at each step of a contact.
+
+    Rule (documented departure from "v_k = the approach speed at first touch"): v_k is the
+    LARGEST approach speed δ̇ seen since the contact began, and at least ``v_floor`` [m/s] > 0.
+    For a single impact this is the impact speed (the approach slows down after touch). For a
+    contact that began slowly and is later compressed fast — a rope sliding from the body onto
+    a fin edge — v_k follows, so χ δ̇ ≤ c while approaching: the damping force is bounded by c
+    times the elastic force (c ≤ 0.75 for Lankarani–Nikravesh) instead of growing as δ̇/v_touch.
+    v_k (the previous value; 0 or −1 when not in contact) must be reset to 0 by the caller when
+    the contact ends."""
+    v = v_k if v_k > delta_dot else delta_dot
+    return v if v > v_floor else v_floor
+
+
+@njit(cache=True)
+def friction_force(f_n, mu, vt0, vt1, vt2, v_reg):
     """Regularised Coulomb friction, Eq. (32): F_t = −μ F_n tanh(|v_t|/v_reg) v_t/|v_t|.
 
-    f_n [N] normal force (>= 0), mu friction coefficient, v_t [m/s] (3,) relative tangential
-    velocity of the net point with respect to the missile surface, v_reg [m/s] > 0 regularisation
-    speed. Departs from Eq. (32)'s sign(v): tanh(|v|/v_reg) replaces sign so the force is
-    continuous at zero slip (its magnitude is below μF_n by the factor tanh(|v|/v_reg), i.e. less
-    than 0.1 % short once |v| > 4 v_reg). Writes the force into ``out`` (3,) and returns its magnitude.
+    f_n [N] normal force (>= 0), mu friction coefficient, (vt0, vt1, vt2) [m/s] relative
+    tangential velocity of the net point with respect to the missile surface, v_reg [m/s] > 0
+    regularisation speed. Departs from Eq. (32)'s sign(v): tanh(|v|/v_reg) replaces sign so the
+    force is continuous at zero slip (its magnitude is below μF_n by the factor tanh(|v|/v_reg),
+    i.e. less than 0.1 % short once |v| > 4 v_reg). Returns the force (3 floats) [N]; its power
+    −F_t·v_t ≥ 0 is always dissipated.
     """
-    s = np.sqrt(v_t[0] * v_t[0] + v_t[1] * v_t[1] + v_t[2] * v_t[2])
+    s = np.sqrt(vt0 * vt0 + vt1 * vt1 + vt2 * vt2)
     if s == 0.0 or f_n == 0.0:
-        out[0] = 0.0
-        out[1] = 0.0
-        out[2] = 0.0
-        return 0.0
-    mag = mu * f_n * np.tanh(s / v_reg)
-    for k in range(3):
-        out[k] = -mag * v_t[k] / s
-    return mag
+        return 0.0, 0.0, 0.0
+    a = -mu * f_n * np.tanh(s / v_reg) / s
+    return a * vt0, a * vt1, a * vt2

@@ -1,10 +1,13 @@
-"""Contact stiffness K_n [N/m^m]: the paper's Hertz rule, Eq. (30)–(31), or a mass/step penalty.
+"""Contact stiffness K_n [N/m^m] from the Hertz law, Eq. (30)–(31) — from physics, never from dt.
 
-With the paper's rope (E = 1 MPa) Eq. (31) gives K_n ≈ 4e4 N/m^1.5 for a 2 mm rope radius: a
-rope node of ~0.6 g arriving at 500 m/s sinks ~0.1 m into the missile — far deeper than the
-rope radius or a fin's thickness. The penalty rule (LS-DYNA SOFT=1 idea, k = s·m/dt²) ties the
-stiffness to the node mass and the time step so that the penetration stays a small fraction of
-the step's travel, and hence of the rope radius once the no-pass-through step limit holds.
+The rope is a cylinder of radius r; on a fin edge (a cylinder of radius h/2) and on the body
+(radius R) it touches as two crossed cylinders, whose Hertz contact is a point contact of
+effective radius R_e = sqrt(R1 R2) (Johnson, Contact Mechanics, §4.2; exact for R1 = R2).
+The modulus is the rope's TRANSVERSE compressive modulus (its cross-section is squeezed), the
+missile is rigid. With the paper's 1 MPa rope (if its transverse modulus were also 1 MPa) a
+rope node of ~1.6 g arriving at 500 m/s would sink ~0.14 m into a fin edge — the rope would
+pass through a 6 mm fin: see ``collide.config`` and docs/validation.md for the stated contact
+modulus of the cases.
 """
 
 from __future__ import annotations
@@ -33,15 +36,10 @@ def rigid_target_stiffness(radius: float, e_net: float, nu_net: float) -> float:
     return 4.0 / 3.0 * math.sqrt(radius / 2.0) * e_net / (1.0 - nu_net ** 2)
 
 
-def penalty_stiffness(scale: float, mass: float, dt: float, delta_ref: float, exponent: float) -> float:
-    """Mass/step penalty (LS-DYNA SOFT=1 style): linear k = s·m/dt² [N/m], expressed for the
-    power law F = K_n δ^m by matching the secant stiffness at the reference penetration δ_ref:
-    K_n = k · δ_ref^(1−m)  [N/m^m].
-
-    scale s (LS-DYNA SOFSCL, default 0.1), mass [kg] of the contacting node, dt [s] time step,
-    delta_ref [m] > 0 the penetration at which the secant stiffness equals k.
-    """
-    return scale * mass / dt ** 2 * delta_ref ** (1.0 - exponent)
+def crossed_cylinders_stiffness(radius_1: float, radius_2: float, e_star: float) -> float:
+    """Eq. (30) for two cylinders of radii R1, R2 [m] crossed at right angles: K = 4/3 E* sqrt(R_e),
+    R_e = sqrt(R1 R2) [N/m^1.5]; e_star [Pa] the contact modulus ((1−ν1²)/E1 + (1−ν2²)/E2)^(-1)."""
+    return 4.0 / 3.0 * e_star * math.sqrt(math.sqrt(radius_1 * radius_2))
 
 
 def hertz_max_penetration(mass: float, speed: float, k_n: float, exponent: float) -> float:

@@ -45,20 +45,10 @@ Packed arrays (``pack_shapes(missile) -> ShapeArrays``, a NamedTuple; pass ``*sh
     2+i fin i). A point exactly on the axis gets its radial direction from +y_b (documented
     choice; any is correct there).
 
-``segment_fin_contact(a, b, *shapes) -> (part, t, point, depth, normal)``
-    Whether the straight rope segment a–b ([m], (3,) each, in B) penetrates any fin plate, even if
-    both end points are outside it (a rope crossing a 4–6 mm fin edge between two sample points).
-    part: 2 + fin index of the deepest penetration, or -1 (then the other outputs are zeros).
-    t ∈ [0, 1]: segment parameter of the contact point ``point = a + t (b - a)`` [m] (3,).
-    depth [m] > 0 and normal (3,) unit: moving the segment by ``depth * normal`` frees it.
-      - If the segment crosses the fin's mid-plane inside the trapezoid (a rope draped over an
-        edge), point is that crossing, depth the in-plane distance from it to the nearest free
-        edge (leading edge, tip or trailing edge; never the root, which is attached to the body)
-        and normal that edge's outward in-plane normal: the rope must slide off over that edge.
-      - Otherwise (the segment dips into a face or corner without crossing the mid-plane) point
-        is the deepest point of the segment inside the plate, depth its distance to the nearest
-        face and normal that face's outward normal (exact: the plate's signed distance along a
-        line is the maximum of 6 affine functions, minimised exactly).
+``segment_core_closest(a, b, fin_origin[i], fin_axes[i], fin_poly[i]) -> (dist, s, q_u, q_v, crossed)``
+    Closest pair of a rope segment (a capsule's centre line) and a fin's core polygon (module
+    section "capsule contact"); ``segment_body_closest(a, b, prof_kind, prof_data, prof_part)``
+    the deepest / nearest point of a segment for the body of revolution.
 
 Allocation-free variants for hot loops return the vectors as scalars:
 ``closest_point_scalar(p, *shapes) -> (d, n_x, n_y, n_z, q_x, q_y, q_z, part)``,
@@ -70,8 +60,7 @@ The parts separately (same outputs, for kernels with their own broad phase):
 ``fin_closest_point(p, fin_origin[i], fin_axes[i], fin_poly[i], fin_half_thickness[i])
 -> (d, normal, q)``.
 
-Python wrappers for many points at once (tests, plots): ``closest_points(points, shapes)`` and
-``segment_fin_contacts(a, b, shapes)``.
+Python wrapper for many points at once (tests, plots): ``closest_points(points, shapes)``.
 """
 
 from __future__ import annotations
@@ -86,7 +75,6 @@ from flexnet_fe.missile.geometry import Missile
 PART_BODY = 0
 PART_NOSE = 1
 FIN_PART_OFFSET = 2
-NO_PART = -1  # segment_fin_contact: no fin touched
 
 
 class ShapeArrays(NamedTuple):
@@ -260,16 +248,6 @@ def body_closest_point(p, prof_kind, prof_data, prof_part):
 
 
 @njit(cache=True)
-def _edge_frame(poly, k):
-    """Start corner (2,) and outward unit normal (2,) of edge k of a counter-clockwise polygon."""
-    a = poly[k]
-    b = poly[(k + 1) % poly.shape[0]]
-    tu, tv = b[0] - a[0], b[1] - a[1]
-    ln = np.sqrt(tu * tu + tv * tv)
-    return a, tv / ln, -tu / ln
-
-
-@njit(cache=True)
 def fin_closest_scalar(p, origin, axes, poly, half):
     """Allocation-free :func:`fin_closest_point`: (d, n_x, n_y, n_z, q_x, q_y, q_z) in B."""
     d0, d1, d2_ = p[0] - origin[0], p[1] - origin[1], p[2] - origin[2]
@@ -370,116 +348,6 @@ def closest_point(p, prof_kind, prof_data, prof_part, fin_origin, fin_axes, fin_
     return d, np.array([nx, ny, nz]), np.array([qx, qy, qz]), part
 
 
-@njit(cache=True)
-def _segment_one_fin(a, b, origin, axes, poly, half):
-    """(hit, t, depth, normal (3,)) of segment a–b against one fin plate (module docstring)."""
-    da, db = a - origin, b - origin
-    la = np.array([da @ axes[0], da @ axes[1], da @ axes[2]])
-    lb = np.array([db @ axes[0], db @ axes[1], db @ axes[2]])
-    dl = lb - la
-    # the 6 bounding planes as affine functions f_j(t) = f0[j] + f1[j] t (signed distances [m]);
-    # plane normals in fin coordinates (u, v, w) in nrm[j]
-    f0 = np.empty(6)
-    f1 = np.empty(6)
-    nrm = np.zeros((6, 3))
-    for k in range(4):
-        c, nu, nv = _edge_frame(poly, k)
-        f0[k] = (la[0] - c[0]) * nu + (la[1] - c[1]) * nv
-        f1[k] = dl[0] * nu + dl[1] * nv
-        nrm[k, 0], nrm[k, 1] = nu, nv
-    f0[4], f1[4], nrm[4, 2] = la[2] - half, dl[2], 1.0
-    f0[5], f1[5], nrm[5, 2] = -la[2] - half, -dl[2], -1.0
-    # clip [0, 1] to the prism {f_j(t) <= 0 for all j}
-    t_lo, t_hi = 0.0, 1.0
-    for j in range(6):
-        if f1[j] == 0.0:
-            if f0[j] > 0.0:
-                return False, 0.0, 0.0, np.zeros(3)
-        else:
-            tj = -f0[j] / f1[j]
-            if f1[j] > 0.0:
-                t_hi = min(t_hi, tj)
-            else:
-                t_lo = max(t_lo, tj)
-    if t_lo >= t_hi:
-        return False, 0.0, 0.0, np.zeros(3)
-    wa, wb = la[2], lb[2]
-    if wa != wb and (wa <= 0.0 <= wb or wb <= 0.0 <= wa):
-        tc = wa / (wa - wb)
-        if t_lo <= tc <= t_hi:  # crosses the mid-plane inside the plate: escape over an edge
-            best = np.inf
-            kb = 1
-            for k in range(1, 4):  # free edges only (not the root, k = 0)
-                fk = -(f0[k] + f1[k] * tc)
-                if fk < best:
-                    best, kb = fk, k
-            nl = nrm[kb]
-            return True, tc, best, nl[0] * axes[0] + nl[1] * axes[1] + nl[2] * axes[2]
-    # deepest point: minimise g(t) = max_j f_j(t) on [t_lo, t_hi]; g is convex piecewise affine,
-    # so its minimum is at an end or where two planes are equal.
-    best_g = np.inf
-    best_t = t_lo
-    for ic in range(2 + 15):
-        if ic == 0:
-            tt = t_lo
-        elif ic == 1:
-            tt = t_hi
-        else:
-            m = ic - 2  # pair index -> (i, j), i < j, of the 6 planes
-            i = 0
-            while m >= 5 - i:
-                m -= 5 - i
-                i += 1
-            j = i + 1 + m
-            den = f1[i] - f1[j]
-            if den == 0.0:
-                continue
-            tt = (f0[j] - f0[i]) / den
-            if tt < t_lo or tt > t_hi:
-                continue
-        g = -np.inf
-        for jj in range(6):
-            g = max(g, f0[jj] + f1[jj] * tt)
-        if g < best_g:
-            best_g, best_t = g, tt
-    jb = 0
-    gmax = -np.inf
-    for jj in range(6):
-        val = f0[jj] + f1[jj] * best_t
-        if val > gmax:
-            gmax, jb = val, jj
-    if best_g >= 0.0:
-        return False, 0.0, 0.0, np.zeros(3)
-    nl = nrm[jb]
-    return True, best_t, -best_g, nl[0] * axes[0] + nl[1] * axes[1] + nl[2] * axes[2]
-
-
-@njit(cache=True)
-def segment_fin_contact(a, b, prof_kind, prof_data, prof_part, fin_origin, fin_axes, fin_poly,
-                        fin_half_thickness, fin_part, fin_bound):
-    """(part id or -1, t [-], point [m] (3,), depth [m], normal (3,)) of the deepest fin
-    penetration of the rope segment a–b [m] (3,) in B (module docstring)."""
-    best_part = NO_PART
-    best_t = 0.0
-    best_depth = 0.0
-    best_n = np.zeros(3)
-    ab0, ab1, ab2 = b[0] - a[0], b[1] - a[1], b[2] - a[2]
-    ll = ab0 * ab0 + ab1 * ab1 + ab2 * ab2
-    for i in range(fin_origin.shape[0]):
-        # skip plates whose bounding sphere the segment does not reach
-        c0, c1, c2 = fin_bound[i, 0] - a[0], fin_bound[i, 1] - a[1], fin_bound[i, 2] - a[2]
-        tc = (c0 * ab0 + c1 * ab1 + c2 * ab2) / ll if ll > 0.0 else 0.0
-        tc = min(max(tc, 0.0), 1.0)
-        e0, e1, e2 = c0 - tc * ab0, c1 - tc * ab1, c2 - tc * ab2
-        if e0 * e0 + e1 * e1 + e2 * e2 > fin_bound[i, 3] ** 2:
-            continue
-        hit, t, depth, n = _segment_one_fin(a, b, fin_origin[i], fin_axes[i], fin_poly[i],
-                                            fin_half_thickness[i])
-        if hit and depth > best_depth:
-            best_part, best_t, best_depth, best_n = fin_part[i], t, depth, n
-    return best_part, best_t, a + best_t * (b - a), best_depth, best_n
-
-
 # ----------------------------------------------------------------------------- vectorised wrappers
 
 
@@ -502,23 +370,147 @@ def closest_points(points: np.ndarray, shapes: ShapeArrays):
     return d, nrm, q, part
 
 
+# ----------------------------------------------------------------------------- capsule contact
+# A rope segment is a capsule: the segment a–b [m] swept by a sphere of the rope radius. A fin is
+# a rounded plate: its planform polygon (the "core", in the fin's mid-plane, root extended into
+# the body as ``fin_poly``) swept by a sphere of the half-thickness h/2. The body of revolution is
+# used as it is. The gap of a capsule and a part is then (distance between the segment and the
+# part's core) − the radii; the closest pair (p on the segment at parameter s, q on the core)
+# gives the normal n = (p − q)/|p − q|, which turns continuously from face to edge to corner
+# wherever the pair is unique (the closest-point map of a convex set is continuous).
+
+
 @njit(cache=True)
-def _segment_kernel(a, b, prof_kind, prof_data, prof_part, fin_origin, fin_axes, fin_poly,
-                    fin_half_thickness, fin_part, fin_bound, part, t, point, depth, nrm):
-    for k in range(a.shape[0]):
-        pk, tk, xk, dk, nk = segment_fin_contact(a[k], b[k], prof_kind, prof_data, prof_part,
-                                                 fin_origin, fin_axes, fin_poly,
-                                                 fin_half_thickness, fin_part, fin_bound)
-        part[k], t[k], point[k], depth[k], nrm[k] = pk, tk, xk, dk, nk
+def _clamp01(t):
+    return 0.0 if t < 0.0 else (1.0 if t > 1.0 else t)
 
 
-def segment_fin_contacts(a: np.ndarray, b: np.ndarray, shapes: ShapeArrays):
-    """Vectorised :func:`segment_fin_contact`: segment ends a, b [m] (n, 3) in B -> part ids (n,)
-    int64 (-1 = no contact), t (n,), points [m] (n, 3), depths [m] (n,), normals (n, 3)."""
-    a = np.ascontiguousarray(a, dtype=np.float64).reshape(-1, 3)
-    b = np.ascontiguousarray(b, dtype=np.float64).reshape(-1, 3)
-    n = a.shape[0]
-    part, t, point = np.empty(n, np.int64), np.empty(n), np.empty((n, 3))
-    depth, nrm = np.empty(n), np.empty((n, 3))
-    _segment_kernel(a, b, *shapes, part, t, point, depth, nrm)
-    return part, t, point, depth, nrm
+@njit(cache=True)
+def _segment_edge_2d(au, av, aw, bu, bv, bw, cu, cv, du, dv):
+    """Closest points of the 3-D segment a–b (fin coordinates) and the in-plane edge c–d (w = 0).
+    Returns (squared distance [m²], s on a–b, t on c–d) (Ericson, Real-Time Collision Detection
+    §5.1.9; a parallel pair returns one of its closest pairs)."""
+    d1u, d1v, d1w = bu - au, bv - av, bw - aw
+    d2u, d2v = du - cu, dv - cv
+    ru, rv, rw = au - cu, av - cv, aw
+    a = d1u * d1u + d1v * d1v + d1w * d1w
+    e = d2u * d2u + d2v * d2v
+    f = d2u * ru + d2v * rv
+    if a <= 1e-30:
+        s = 0.0
+        t = _clamp01(f / e)
+    else:
+        c = d1u * ru + d1v * rv + d1w * rw
+        b = d1u * d2u + d1v * d2v
+        den = a * e - b * b
+        s = _clamp01((b * f - c * e) / den) if den > 1e-30 * a * e else 0.0
+        t = (b * s + f) / e
+        if t < 0.0:
+            t = 0.0
+            s = _clamp01(-c / a)
+        elif t > 1.0:
+            t = 1.0
+            s = _clamp01((b - c) / a)
+    pu, pv, pw = au + s * d1u, av + s * d1v, aw + s * d1w
+    qu, qv = cu + t * d2u, cv + t * d2v
+    return (pu - qu) ** 2 + (pv - qv) ** 2 + pw * pw, s, t
+
+
+@njit(cache=True)
+def _inside_polygon(u, v, poly):
+    """Is (u, v) inside (or on) the counter-clockwise convex polygon ``poly`` (k, 2)?"""
+    k = poly.shape[0]
+    for i in range(k):
+        au, av = poly[i, 0], poly[i, 1]
+        bu, bv = poly[(i + 1) % k, 0], poly[(i + 1) % k, 1]
+        if (u - au) * (bv - av) - (v - av) * (bu - au) > 0.0:
+            return False
+    return True
+
+
+@njit(cache=True)
+def segment_core_closest(a, b, origin, axes, poly):
+    """Closest pair of the segment a–b [m] (3,) in B and a fin's core polygon (its planform in
+    the mid-plane). origin (3,), axes (3, 3) rows e1, e2, n, poly (k, 2) counter-clockwise in
+    (u, v) [m] (``ShapeArrays`` fields of one fin).
+
+    Returns (dist [m] ≥ 0, s ∈ [0, 1] on the segment, q_u, q_v [m] fin coordinates of the
+    closest core point, crossed). crossed = True when the segment passes through the core
+    (dist = 0; s and q are the crossing). Exact: the closest pair of a segment and a convex
+    polygon is a crossing, an end point over the polygon, or a segment–edge pair."""
+    ra = np.empty(3)
+    rb = np.empty(3)
+    for k in range(3):
+        ra[k] = (a[0] - origin[0]) * axes[k, 0] + (a[1] - origin[1]) * axes[k, 1] + (a[2] - origin[2]) * axes[k, 2]
+        rb[k] = (b[0] - origin[0]) * axes[k, 0] + (b[1] - origin[1]) * axes[k, 1] + (b[2] - origin[2]) * axes[k, 2]
+    aw, bw = ra[2], rb[2]
+    if (aw <= 0.0 <= bw or bw <= 0.0 <= aw) and aw != bw:
+        sc = aw / (aw - bw)
+        cu = ra[0] + sc * (rb[0] - ra[0])
+        cv = ra[1] + sc * (rb[1] - ra[1])
+        if _inside_polygon(cu, cv, poly):
+            return 0.0, sc, cu, cv, True
+    best = np.inf
+    bs, bu, bv = 0.0, 0.0, 0.0
+    if _inside_polygon(ra[0], ra[1], poly):
+        best, bs, bu, bv = aw * aw, 0.0, ra[0], ra[1]
+    if _inside_polygon(rb[0], rb[1], poly) and bw * bw < best:
+        best, bs, bu, bv = bw * bw, 1.0, rb[0], rb[1]
+    k = poly.shape[0]
+    for i in range(k):
+        cu, cv = poly[i, 0], poly[i, 1]
+        du, dv = poly[(i + 1) % k, 0], poly[(i + 1) % k, 1]
+        d2, s, t = _segment_edge_2d(ra[0], ra[1], aw, rb[0], rb[1], bw, cu, cv, du, dv)
+        if d2 < best:
+            best, bs, bu, bv = d2, s, cu + t * (du - cu), cv + t * (dv - cv)
+    return np.sqrt(best), bs, bu, bv, best == 0.0
+
+
+@njit(cache=True)
+def segment_body_closest(a, b, prof_kind, prof_data, prof_part):
+    """Point of the segment a–b [m] (3,) in B deepest in (or nearest to) the body of revolution.
+
+    The body's signed distance d(p) is convex (convex solid), so along the segment
+    φ(s) = d(a + s (b − a)) is convex with derivative φ'(s) = n(p(s))·(b − a) (n the outward
+    normal of the closest surface point). Its minimum is at an end where φ' does not change
+    sign, otherwise at the root of φ', found by the Illinois (modified regula falsi) method
+    to |Δs| < 1e-9 (at most 60 evaluations; typically 5–10).
+
+    Returns (d [m] signed, s, n_x, n_y, n_z outward normal, q_x, q_y, q_z [m] surface point,
+    part id 0 or 1)."""
+    ab0, ab1, ab2 = b[0] - a[0], b[1] - a[1], b[2] - a[2]
+    p = np.empty(3)
+    d0, nx0, ny0, nz0, qx0, qy0, qz0, pt0 = body_closest_scalar(a, prof_kind, prof_data, prof_part)
+    g0 = nx0 * ab0 + ny0 * ab1 + nz0 * ab2
+    if g0 >= 0.0:
+        return d0, 0.0, nx0, ny0, nz0, qx0, qy0, qz0, pt0
+    d1, nx1, ny1, nz1, qx1, qy1, qz1, pt1 = body_closest_scalar(b, prof_kind, prof_data, prof_part)
+    g1 = nx1 * ab0 + ny1 * ab1 + nz1 * ab2
+    if g1 <= 0.0:
+        return d1, 1.0, nx1, ny1, nz1, qx1, qy1, qz1, pt1
+    s0, s1 = 0.0, 1.0
+    side = 0
+    sm = 0.5
+    dm, nxm, nym, nzm, qxm, qym, qzm, ptm = d0, nx0, ny0, nz0, qx0, qy0, qz0, pt0
+    for _ in range(60):
+        sm = (s0 * g1 - s1 * g0) / (g1 - g0)
+        if not (s0 < sm < s1):
+            sm = 0.5 * (s0 + s1)
+        p[0], p[1], p[2] = a[0] + sm * ab0, a[1] + sm * ab1, a[2] + sm * ab2
+        dm, nxm, nym, nzm, qxm, qym, qzm, ptm = body_closest_scalar(p, prof_kind, prof_data, prof_part)
+        gm = nxm * ab0 + nym * ab1 + nzm * ab2
+        if gm > 0.0:
+            s1, g1 = sm, gm
+            if side == 1:
+                g0 *= 0.5
+            side = 1
+        elif gm < 0.0:
+            s0, g0 = sm, gm
+            if side == -1:
+                g1 *= 0.5
+            side = -1
+        else:
+            break
+        if s1 - s0 < 1e-9:
+            break
+    return dm, sm, nxm, nym, nzm, qxm, qym, qzm, ptm

@@ -32,6 +32,15 @@ class RopeNet(Section):
     density: Positive = Field(1000.0, description="rope material density [kg/m^3] (paper: 1000)")
     damping_ratio: NonNegative = Field(0.05, lt=1.0, description=(
         "damping ratio ζ of the axial mode of one bar [-], Eq. (4); not given in the paper"))
+    poisson_ratio: float = Field(0.3, ge=0.0, lt=0.5, description=(
+        "Poisson's ratio ν of the rope [-], Eq. (30)-(31) (not given in the paper)"))
+    transverse_modulus: Positive | None = Field(None, description=(
+        "transverse compressive modulus of the rope's cross-section [Pa], the E1 of the contact law "
+        "Eq. (30); None = youngs_modulus (isotropic rope). A fibre rope is much stiffer across "
+        "than a 1 MPa axial modulus suggests (see docs/validation.md, collision)"))
+    breaking_strength: Positive | None = Field(None, description=(
+        "breaking stress of the rope [Pa] on its cross-section π d²/4; a segment whose elastic "
+        "tension exceeds it breaks in the collision. None = unbreakable (the paper's model)"))
     slack_offset: float = Field(0.0, description=(
         "LINK167-style offset of one bar [m]: the bar is taut when its length exceeds its rest "
         "length − offset; > 0 pretension, < 0 slack (paper: not given, 0)"))

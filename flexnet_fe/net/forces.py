@@ -7,6 +7,7 @@ style offset) and the rope-segment aerodynamic force Eq. (5)–(10).
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 from numba import njit
 
@@ -32,6 +33,35 @@ def rope_tension(length, rest_length, stiffness, damping, offset, length_rate):
         return 0.0
     t = stiffness * stretch + damping * length_rate
     return t if t > 0.0 else 0.0
+
+
+@njit(cache=True)
+def spring_force(d0, d1, d2, w0, w1, w2, extra, rest_length, stiffness, damping, offset):
+    """The one rope-segment mapper of the package (deploy ``net.kernels`` and collide
+    ``collide.kernel``): Eq. (1)–(4) on a segment whose end j is at d = x_j − x_i [m] from end i
+    and moves at w = v_j − v_i [m/s] relative to it; ``extra`` [m] is rope length not on the
+    straight line (the hub wrap, Eq. 12–19; 0 otherwise).
+
+    Returns (T [N] from :func:`rope_tension`, unit vector u (3 floats) from i to j, straight
+    length |d| [m], length rate l̇ [m/s], stretch l − (l0 − offset) [m]); the force on node i is
+    +T u, on node j −T u. A zero-length segment returns T = 0 and u = 0."""
+    lf = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+    if lf == 0.0:
+        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, extra - (rest_length - offset)
+    u0 = d0 / lf
+    u1 = d1 / lf
+    u2 = d2 / lf
+    ldot = w0 * u0 + w1 * u1 + w2 * u2
+    ln = lf + extra
+    return (rope_tension(ln, rest_length, stiffness, damping, offset, ldot), u0, u1, u2, lf, ldot,
+            ln - (rest_length - offset))
+
+
+@njit(cache=True)
+def rope_elastic_energy(stretch, stiffness):
+    """Elastic energy ½ K s² [J] of one segment with stretch s = l − (l0 − offset) [m] > 0 (the
+    potential of :func:`rope_tension`'s spring part; 0 when slack)."""
+    return 0.5 * stiffness * stretch * stretch if stretch > 0.0 else 0.0
 
 
 @njit(cache=True)
@@ -72,50 +102,32 @@ def segment_aero_force(u0, u1, u2, length, vx, vy, vz, rho, diameter):
     return (a * vx + b * (vx - ve * u0), a * vy + b * (vy - ve * u1), a * vz + b * (vz - ve * u2))
 
 
-@njit(cache=True)
-def accumulate_spring_forces(x, v, springs, rest_length, stiffness, damping, offset, skip, f, tension):
-    """Add all rope tensions into f, Eq. (1)–(4), (11).
+class RopeMaterial(NamedTuple):
+    """The rope of a net, one home for its material (issue 14): youngs_modulus E [Pa] (axial,
+    Eq. (3)), poisson_ratio ν [-], density ρ [kg/m³], diameter d [m], transverse_modulus E_t [Pa]
+    (the contact law's E1, Eq. (30)), breaking_strength σ_b [Pa] (inf: unbreakable)."""
 
-    x, v : node positions [m] / velocities [m/s], shape (n, 3); springs (m, 2) int64;
-    rest_length [m], stiffness [N/m], damping [N s/m], offset [m], shape (m,);
-    skip (m,) bool — segments handled elsewhere (hub links); f (n, 3) [N] accumulated in place;
-    tension (m,) [N] written (0 for skipped segments).
-    """
-    for s in range(springs.shape[0]):
-        if skip[s]:
-            tension[s] = 0.0
-            continue
-        i = springs[s, 0]
-        j = springs[s, 1]
-        d0 = x[j, 0] - x[i, 0]; d1 = x[j, 1] - x[i, 1]; d2 = x[j, 2] - x[i, 2]
-        l = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-        if l == 0.0:
-            tension[s] = 0.0
-            continue
-        u0 = d0 / l; u1 = d1 / l; u2 = d2 / l
-        ldot = (v[j, 0] - v[i, 0]) * u0 + (v[j, 1] - v[i, 1]) * u1 + (v[j, 2] - v[i, 2]) * u2
-        t = rope_tension(l, rest_length[s], stiffness[s], damping[s], offset[s], ldot)
-        tension[s] = t
-        f[i, 0] += t * u0; f[i, 1] += t * u1; f[i, 2] += t * u2
-        f[j, 0] -= t * u0; f[j, 1] -= t * u1; f[j, 2] -= t * u2
+    youngs_modulus: float
+    poisson_ratio: float
+    density: float
+    diameter: float
+    transverse_modulus: float
+    breaking_strength: float
+
+    @property
+    def radius(self) -> float:
+        """Rope radius d/2 [m]."""
+        return 0.5 * self.diameter
+
+    @property
+    def breaking_load(self) -> float:
+        """Tension at failure σ_b π d²/4 [N] (inf: unbreakable)."""
+        return self.breaking_strength * math.pi * self.diameter ** 2 / 4.0
 
 
-@njit(cache=True)
-def accumulate_aero_forces(x, v, springs, diameter, rho, wind, skip, f):
-    """Add the rope aerodynamic loads into f [N], shape (n, 3): each segment's force
-    (:func:`segment_aero_force`, with the mean velocity of its ends minus ``wind`` (3,) [m/s])
-    goes half to each end node, Eq. (9)–(10). ``skip`` (m,) bool excludes segments."""
-    for s in range(springs.shape[0]):
-        if skip[s]:
-            continue
-        i = springs[s, 0]
-        j = springs[s, 1]
-        d0 = x[j, 0] - x[i, 0]; d1 = x[j, 1] - x[i, 1]; d2 = x[j, 2] - x[i, 2]
-        l = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-        if l == 0.0:
-            continue
-        fx, fy, fz = segment_aero_force(d0 / l, d1 / l, d2 / l, l, 0.5 * (v[i, 0] + v[j, 0]) - wind[0],
-                                        0.5 * (v[i, 1] + v[j, 1]) - wind[1],
-                                        0.5 * (v[i, 2] + v[j, 2]) - wind[2], rho, diameter[s])
-        f[i, 0] += 0.5 * fx; f[i, 1] += 0.5 * fy; f[i, 2] += 0.5 * fz
-        f[j, 0] += 0.5 * fx; f[j, 1] += 0.5 * fy; f[j, 2] += 0.5 * fz
+def rope_material(net_cfg) -> RopeMaterial:
+    """The ``RopeMaterial`` of a ``[net]`` table (``net.config.RopeNet``)."""
+    e = float(net_cfg.youngs_modulus)
+    return RopeMaterial(e, float(net_cfg.poisson_ratio), float(net_cfg.density), float(net_cfg.rope_diameter),
+                        e if net_cfg.transverse_modulus is None else float(net_cfg.transverse_modulus),
+                        math.inf if net_cfg.breaking_strength is None else float(net_cfg.breaking_strength))

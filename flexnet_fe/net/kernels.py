@@ -14,7 +14,7 @@ import math
 import numpy as np
 from numba import njit
 
-from flexnet_fe.net.forces import C_CROSS, CD_FRICTION, rope_tension, segment_aero_force
+from flexnet_fe.net.forces import C_CROSS, CD_FRICTION, segment_aero_force, spring_force
 
 C_MAX = CD_FRICTION + C_CROSS
 from flexnet_fe.net.hub import hub_link_state
@@ -49,21 +49,18 @@ def net_forces(x, v, hub_state, wrap, springs, rest, stiffness, damping, offset,
             gamma, w = hub_link_state(x, v, hub, j, theta, omega, anchor[s], r0, half_length, wrap[s], pt, vt)
             wrap[s] = w
             d0 = x[j, 0] - pt[0]; d1 = x[j, 1] - pt[1]; d2 = x[j, 2] - pt[2]
-            lf = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-            l = lf + r0 * abs(w)
+            extra = r0 * abs(w)
             vi0 = vt[0]; vi1 = vt[1]; vi2 = vt[2]
         else:
             i = springs[s, 0]
             d0 = x[j, 0] - x[i, 0]; d1 = x[j, 1] - x[i, 1]; d2 = x[j, 2] - x[i, 2]
-            lf = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-            l = lf
+            extra = 0.0
             vi0 = v[i, 0]; vi1 = v[i, 1]; vi2 = v[i, 2]
+        t, u0, u1, u2, lf, ldot, stretch = spring_force(d0, d1, d2, v[j, 0] - vi0, v[j, 1] - vi1, v[j, 2] - vi2,
+                                                        extra, rest[s], stiffness[s], damping[s], offset[s])
         if lf == 0.0:
             tension[s] = 0.0
             continue
-        u0 = d0 / lf; u1 = d1 / lf; u2 = d2 / lf
-        ldot = (v[j, 0] - vi0) * u0 + (v[j, 1] - vi1) * u1 + (v[j, 2] - vi2) * u2
-        t = rope_tension(l, rest[s], stiffness[s], damping[s], offset[s], ldot)
         tension[s] = t
         if t > tmax:
             tmax = t

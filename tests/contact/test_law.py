@@ -117,16 +117,13 @@ def _slide(mass, g, mu, v0, k_n, v_reg, dt, t_end):
     undamped Hertz contact spring, starting at the static penetration (no bounce)."""
     y = (mass * g / k_n) ** (1 / 1.5)  # static penetration
     vx, vy, x = v0, 0.0, 0.0
-    ft = np.zeros(3)
-    vt = np.zeros(3)
     n = int(t_end / dt)
     xs = np.empty(n)
     vs = np.empty(n)
     for i in range(n):
         fn = normal_force(y, vy, k_n, 1.5, 0.0)  # y = penetration, vy its rate
-        vt[0] = vx
-        friction_force(fn, mu, vt, v_reg, ft)
-        vx += dt * ft[0] / mass
+        ft0, _, _ = friction_force(fn, mu, vx, 0.0, 0.0, v_reg)
+        vx += dt * ft0 / mass
         vy += dt * (mass * g - fn) / mass
         y += dt * vy
         x += dt * vx
@@ -151,10 +148,25 @@ def test_block_sliding_decelerates_at_mu_g():
 
 
 def test_friction_opposes_slip_and_is_continuous():
-    out = np.zeros(3)
-    f = friction_force(10.0, 0.5, np.array([0.0, 3.0, 4.0]), 1e-3, out)
-    assert f == pytest.approx(5.0, rel=1e-12)  # tanh(5000) = 1 → μ F_n
+    out = np.array(friction_force(10.0, 0.5, 0.0, 3.0, 4.0, 1e-3))
+    assert np.linalg.norm(out) == pytest.approx(5.0, rel=1e-12)  # tanh(5000) = 1 → μ F_n
     np.testing.assert_allclose(out, [0.0, -3.0, -4.0], rtol=1e-12)
     # half a regularisation speed of slip: tanh(0.5) of the Coulomb force (continuous at 0)
-    f = friction_force(10.0, 0.5, np.array([0.5e-3, 0.0, 0.0]), 1e-3, out)
-    assert f == pytest.approx(5.0 * math.tanh(0.5), rel=1e-12)
+    out = np.array(friction_force(10.0, 0.5, 0.5e-3, 0.0, 0.0, 1e-3))
+    assert np.linalg.norm(out) == pytest.approx(5.0 * math.tanh(0.5), rel=1e-12)
+
+
+def test_approach_speed_rule_bounds_the_damping():
+    # Reference: the rule's definition (law.approach_speed): v_k = max(previous v_k, δ̇, floor).
+    # A contact that begins at 1 m/s and is later compressed at 300 m/s: with v_k frozen at the
+    # first touch the damping term χ δ̇ would be 0.75 · 300 = 225 × the elastic force; with the
+    # rule it is at most c = 3(1 − e²)/4 = 0.5625 for e = 0.5 (Lankarani–Nikravesh).
+    from flexnet_fe.contact.law import approach_speed
+
+    c = hysteresis_factor(DAMPING_CODE[DampingModel.lankarani_nikravesh], 0.5, 1.0)
+    vk = approach_speed(0.0, 1.0, 0.1)
+    assert vk == 1.0
+    vk = approach_speed(vk, 300.0, 0.1)
+    assert vk == 300.0 and c / vk * 300.0 == pytest.approx(0.5625, rel=1e-14)
+    assert approach_speed(300.0, -50.0, 0.1) == 300.0  # restitution keeps the impact's v_k
+    assert approach_speed(0.0, 0.01, 0.1) == 0.1  # floor

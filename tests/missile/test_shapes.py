@@ -5,9 +5,9 @@ import pytest
 
 from flexnet_fe.missile.config import MissileConfig
 from flexnet_fe.missile.geometry import build_missile
-from flexnet_fe.missile.shapes import (FIN_PART_OFFSET, PART_BODY, PART_NOSE, closest_points,
-                                       fin_closest_point, pack_shapes, part_names,
-                                       segment_fin_contacts)
+from flexnet_fe.missile.shapes import (FIN_PART_OFFSET, PART_BODY, PART_NOSE, body_closest_point,
+                                       closest_points, fin_closest_point, pack_shapes, part_names,
+                                       segment_body_closest, segment_core_closest)
 
 EXACT = 1e-12  # [m] all special-point values are closed forms: round-off only
 
@@ -188,112 +188,91 @@ def _wing1(missile):
     return fin
 
 
-def test_segment_crossing_leading_edge_between_samples(missile):
+def _core(missile, fin):
+    sh = pack_shapes(missile)
+    return sh.fin_origin[fin.index], sh.fin_axes[fin.index], sh.fin_poly[fin.index]
+
+
+def _closest(missile, fin, a, b):
+    """segment_core_closest with q as a point in B."""
+    o, ax, poly = _core(missile, fin)
+    d, s, qu, qv, crossed = segment_core_closest(np.asarray(a, float), np.asarray(b, float), o, ax, poly)
+    return d, s, o + qu * ax[0] + qv * ax[1], crossed
+
+
+def test_capsule_core_face_edge_corner(missile):
+    # Reference: closed forms of point/segment distances to a planar polygon.
     fin = _wing1(missile)
-    u = 0.5 * fin.span
-    e = 0.004  # the rope sits e (in the plate plane, normal to the edge) behind the leading edge
-    lam = fin.leading_edge_sweep
-    le_point = fin.origin + u * fin.e1 + u * np.tan(lam) * fin.e2
-    # outward in-plane normal of the leading edge (u, v) direction (cos Λ, sin Λ) -> (sin Λ, -cos Λ)
-    edge_normal = np.sin(lam) * fin.e1 - np.cos(lam) * fin.e2
-    x0 = le_point - e * edge_normal
-    a = x0 + 0.05 * fin.n + 0.01 * fin.e1
-    b = x0 - 0.05 * fin.n - 0.01 * fin.e1
-    # 14 point samples (7.1 mm apart through the thickness) miss the 6 mm plate: all outside
-    t_s = (np.arange(14) + 0.5) / 14
-    samples = a + t_s[:, None] * (b - a)
-    assert closest_points(samples, pack_shapes(missile))[0].min() > 0
-    part, t, point, depth, normal = segment_fin_contacts(a, b, pack_shapes(missile))
-    assert part[0] == FIN_PART_OFFSET + fin.index
-    # the segment crosses the mid-plane at t = 1/2, at x0: depth e, normal = the edge normal
-    np.testing.assert_allclose(t[0], 0.5, atol=EXACT)
-    np.testing.assert_allclose(point[0], x0, atol=EXACT)
-    np.testing.assert_allclose(depth[0], e, atol=EXACT)
-    np.testing.assert_allclose(normal[0], edge_normal, atol=EXACT)
+    tip_mid = 0.5 * (fin.corners[2] + fin.corners[3])
+    # face: a chordwise segment 10 mm above the mid-plane, over the plate: dist 10 mm, q below it
+    a, b = tip_mid - 0.05 * fin.e1 + 0.01 * fin.n - 0.01 * fin.e2, tip_mid - 0.05 * fin.e1 + 0.01 * fin.n + 0.01 * fin.e2
+    d, s, q, crossed = _closest(missile, fin, a, b)
+    p = a + s * (b - a)
+    assert not crossed and d == pytest.approx(0.01, abs=EXACT)
+    np.testing.assert_allclose((p - q) / d, fin.n, atol=1e-9)
+    # tip edge: a segment along n, 4 mm outboard of the tip, crossing the mid-plane: dist 4 mm,
+    # normal = the tip's outward in-plane normal e1, closest point at the crossing
+    a, b = tip_mid + 0.004 * fin.e1 + 0.03 * fin.n, tip_mid + 0.004 * fin.e1 - 0.01 * fin.n
+    d, s, q, crossed = _closest(missile, fin, a, b)
+    assert not crossed and d == pytest.approx(0.004, abs=EXACT) and s == pytest.approx(0.75, abs=1e-12)
+    np.testing.assert_allclose(q, tip_mid, atol=EXACT)
+    # edge, off the plane: chordwise segment 3 mm outboard and 4 mm above: dist 5 mm (3-4-5)
+    a, b = tip_mid + 0.003 * fin.e1 + 0.004 * fin.n - 0.01 * fin.e2, tip_mid + 0.003 * fin.e1 + 0.004 * fin.n + 0.01 * fin.e2
+    d, s, q, crossed = _closest(missile, fin, a, b)
+    p = a + s * (b - a)
+    assert d == pytest.approx(0.005, abs=EXACT)
+    np.testing.assert_allclose((p - q) / d, 0.6 * fin.e1 + 0.8 * fin.n, atol=1e-9)
+    # corner: the tip leading-edge corner, a segment ending 2 mm beyond it along both edges' outward
+    # bisector and 1 mm above: dist = |p − corner|
+    c = fin.corners[2]
+    t_le = fin.uv[2] - fin.uv[1]
+    n_le = np.array([t_le[1], -t_le[0]]) / np.linalg.norm(t_le)  # outward normal of the leading edge
+    n_uv = n_le + np.array([1.0, 0.0])  # + the tip's (e1): the bisector lies in the corner's region
+    out = n_uv[0] * fin.e1 + n_uv[1] * fin.e2
+    out /= np.linalg.norm(out)
+    p = c + 0.002 * out + 0.001 * fin.n
+    d, s, q, crossed = _closest(missile, fin, p, p + 0.03 * out)
+    assert s == 0.0 and d == pytest.approx(np.linalg.norm(p - c), abs=EXACT)
+    np.testing.assert_allclose(q, c, atol=EXACT)
+    # through the face: crossed, dist 0, at the crossing
+    a, b = tip_mid - 0.05 * fin.e1 + 0.02 * fin.n, tip_mid - 0.05 * fin.e1 - 0.02 * fin.n
+    d, s, q, crossed = _closest(missile, fin, a, b)
+    assert crossed and d == 0.0 and s == pytest.approx(0.5, abs=1e-12)
 
 
-def test_segment_near_tip_and_miss(missile):
+def test_capsule_normal_is_continuous_from_face_to_edge(missile):
+    # Reference: the closest-point map of a convex set is 1-Lipschitz, so the normal
+    # n = (p − q)/|p − q| turns by at most |Δp|/dist when the segment moves by Δp. A chordwise
+    # segment 2 mm above the mid-plane slides outboard across the tip (face → edge → free):
+    # the normal must turn smoothly from n to e1 (no jump at the face/edge switch).
     fin = _wing1(missile)
-    mid_tip = 0.5 * (fin.corners[2] + fin.corners[3])
-    shapes = pack_shapes(missile)
-    # crossing 3 mm inboard of the tip, mid-chord: the tip is the nearest free edge
-    x0 = mid_tip - 0.003 * fin.e1
-    part, t, point, depth, normal = segment_fin_contacts(x0 + 0.1 * fin.n, x0 - 0.02 * fin.n,
-                                                         shapes)
-    assert part[0] == FIN_PART_OFFSET + fin.index
-    np.testing.assert_allclose([t[0], depth[0], *normal[0]], [0.1 / 0.12, 0.003, *fin.e1],
-                               atol=EXACT)
-    # the same segment 3 mm outboard of the tip misses
-    x1 = mid_tip + 0.003 * fin.e1
-    part, *_ = segment_fin_contacts(x1 + 0.1 * fin.n, x1 - 0.02 * fin.n, shapes)
-    assert part[0] == -1
+    tip_mid = 0.5 * (fin.corners[2] + fin.corners[3])
+    us = np.linspace(-0.004, 0.004, 801)
+    normals, dists = [], []
+    for u in us:
+        a = tip_mid + u * fin.e1 + 0.002 * fin.n - 0.01 * fin.e2
+        d, s, q, _ = _closest(missile, fin, a, a + 0.02 * fin.e2)
+        normals.append((a + s * 0.02 * fin.e2 - q) / d)
+        dists.append(d)
+    normals = np.array(normals)
+    turn = np.linalg.norm(np.diff(normals, axis=0), axis=1)
+    assert np.all(turn <= (us[1] - us[0]) / min(dists) * (1 + 1e-9))
+    np.testing.assert_allclose(normals[0], fin.n, atol=1e-12)
+    np.testing.assert_allclose(normals[-1], (0.004 * fin.e1 + 0.002 * fin.n) / np.hypot(0.004, 0.002), atol=1e-12)
+    assert np.all(np.abs(np.linalg.norm(normals, axis=1) - 1.0) < 1e-12)
 
 
-def test_segment_dipping_into_a_face(missile):
-    fin = _wing1(missile)
-    h2 = 0.5 * fin.thickness
-    x0 = fin.origin + 0.5 * fin.span * fin.e1 + (0.5 * fin.span * np.tan(fin.leading_edge_sweep)
-                                                 + 0.5 * fin.tip_chord) * fin.e2
-    # a V-free straight segment lying 1 mm below the upper face, parallel to it, well inside
-    a = x0 + (h2 - 0.001) * fin.n - 0.02 * fin.e2
-    b = x0 + (h2 - 0.001) * fin.n + 0.02 * fin.e2
-    part, t, point, depth, normal = segment_fin_contacts(a, b, pack_shapes(missile))
-    assert part[0] == FIN_PART_OFFSET + fin.index
-    np.testing.assert_allclose([depth[0], *normal[0]], [0.001, *fin.n], atol=EXACT)
-    # a segment descending from 5 mm above the face to 0.5 mm below it (not reaching the
-    # mid-plane): deepest point is the lower end b, depth 0.5 mm
-    a = x0 + (h2 + 0.005) * fin.n
-    b = x0 + (h2 - 0.0005) * fin.n + 0.003 * fin.e2
-    part, t, point, depth, normal = segment_fin_contacts(a, b, pack_shapes(missile))
-    np.testing.assert_allclose([t[0], depth[0], *normal[0]], [1.0, 0.0005, *fin.n], atol=EXACT)
-
-
-def test_segments_agree_with_dense_point_sampling():
-    # second model: sample each random segment at 2001 points with the plate's point-wise
-    # signed distance. Sampling resolves depths to about |b - a|/2000 <= 1e-4 m.
-    missile = build_missile(MissileConfig(preset="radar"))
-    rng = np.random.default_rng(3)
-    shapes = pack_shapes(missile)
-    fin = missile.fin("rudder_2")
-    i = fin.index
-    n_seg = 200
-    centre = fin.origin + 0.5 * fin.span * fin.e1 + 0.1 * fin.e2
-    a = centre + rng.normal(scale=0.08, size=(n_seg, 3))
-    b = centre + rng.normal(scale=0.08, size=(n_seg, 3))
-    # second half: grazing segments on one side of the mid-plane (w in (0, 3h/2)), which dip
-    # into the face without crossing the mid-plane
-    half = n_seg // 2
-    for x in (a, b):
-        x[half:] -= np.outer((x[half:] - fin.origin) @ fin.n, fin.n)
-        x[half:] += np.outer(rng.uniform(1e-4, 1.5 * fin.thickness, n_seg - half), fin.n)
-    part, t, point, depth, normal = segment_fin_contacts(a, b, shapes)
-    ts = np.linspace(0.0, 1.0, 2001)
-    n_hits = [0, 0]
-    for k in range(n_seg):
-        sdf = np.array([fin_closest_point(a[k] + tt * (b[k] - a[k]), shapes.fin_origin[i],
-                                          shapes.fin_axes[i], shapes.fin_poly[i],
-                                          shapes.fin_half_thickness[i])[0] for tt in ts])
-        res = np.linalg.norm(b[k] - a[k]) / 2000
-        if sdf.min() < -res:
-            assert part[k] == FIN_PART_OFFSET + i
-        if part[k] == FIN_PART_OFFSET + i:
-            assert sdf.min() < res
-            w_a = (a[k] - fin.origin) @ fin.n
-            w_b = (b[k] - fin.origin) @ fin.n
-            n_hits[int(w_a * w_b > 0)] += 1
-            if w_a * w_b > 0:  # not crossing the mid-plane: depth = -min of the plate SDF
-                np.testing.assert_allclose(depth[k], -sdf.min(), atol=res)
-            else:
-                # crossing: t is where w = 0 and depth the in-plane distance from that point to
-                # the nearest free edge line (leading edge, tip, trailing edge of fin.uv)
-                np.testing.assert_allclose(t[k], w_a / (w_a - w_b), atol=1e-12)
-                uv = fin.to_plane(point[k])[0, :2]
-                dist = []
-                for e in (1, 2, 3):
-                    c0, c1 = fin.uv[e], fin.uv[(e + 1) % 4]
-                    tan = (c1 - c0) / np.linalg.norm(c1 - c0)
-                    dist.append(abs(np.cross(tan, uv - c0)))
-                np.testing.assert_allclose(depth[k], min(dist), atol=1e-12)
-                # escaping over an edge needs at least the plate's local depth
-                assert depth[k] >= -sdf[np.argmin(np.abs(ts - t[k]))] - res
-    assert min(n_hits) > 10  # both branches (crossing, not crossing) exercised
+def test_segment_body_closest_matches_dense_sampling(missile):
+    # Reference (second model): the minimum of the body's point-wise signed distance over 4001
+    # points of the segment; sampling resolves the minimum to ~ (|b − a|/4000)² curvature terms.
+    rng = np.random.default_rng(5)
+    sh = pack_shapes(missile)
+    for _ in range(60):
+        x = -rng.uniform(0.0, missile.length)
+        a = np.array([x, *rng.normal(scale=0.15, size=2)])
+        b = a + rng.normal(scale=0.1, size=3)
+        d, s, *_rest, part = segment_body_closest(a, b, sh.prof_kind, sh.prof_data, sh.prof_part)
+        ts = np.linspace(0.0, 1.0, 4001)
+        sdf = np.array([body_closest_point(a + t * (b - a), sh.prof_kind, sh.prof_data, sh.prof_part)[0] for t in ts])
+        assert d <= sdf.min() + 1e-12
+        assert d == pytest.approx(sdf.min(), abs=2e-7)

@@ -5,10 +5,32 @@ import math
 import numpy as np
 import pytest
 
-from flexnet_fe.net.forces import (accumulate_aero_forces, accumulate_spring_forces, aero_coefficients,
-                                   rope_tension, segment_aero_force)
+from flexnet_fe.net.forces import aero_coefficients, rope_tension, segment_aero_force, spring_force
+from flexnet_fe.net.kernels import net_forces
 
 K, C, L0 = 200.0, 3.0, 0.05
+
+
+def production_forces(x, v, springs, rest, k, c, diameter, air=False, wind=(0.0, 0.0, 0.0), rho=1.0):
+    """Forces of the production deploy kernel (``net.kernels.net_forces``) with gravity off and
+    no hub: f (n, 3) [N], tension (m,) [N]."""
+    n, m = len(x), len(springs)
+    f, t = np.zeros((n, 3)), np.zeros(m)
+    net_forces(np.asarray(x, float), np.asarray(v, float), np.zeros(2), np.zeros(m), springs, np.full(m, rest),
+               np.full(m, k), np.full(m, c), np.zeros(m), np.full(m, diameter), np.zeros(m, np.bool_), np.zeros(m),
+               np.ones(n), -1, 0.1, 0.01, np.zeros(3), rho, np.asarray(wind, float), air, f, t, np.zeros(n))
+    return f, t
+
+
+def test_spring_force_mapper_hand_values():
+    # the shared mapper (deploy and collide kernels): 3-4-5 triangle, taut, stretching at 2 m/s
+    t, u0, u1, u2, lf, ldot, stretch = spring_force(0.03, 0.04, 0.0, 0.6, 0.8, 0.0, 0.0, 0.04, K, C, 0.0)
+    assert (u0, u1, u2) == pytest.approx((0.6, 0.8, 0.0), abs=1e-15)
+    assert lf == pytest.approx(0.05, rel=1e-15) and ldot == pytest.approx(1.0, rel=1e-15)
+    assert stretch == pytest.approx(0.01, rel=1e-12) and t == pytest.approx(K * 0.01 + C * 1.0, rel=1e-12)
+    # wrapped length (hub link): the extra length counts in the stretch, not in the direction
+    t2, *_ = spring_force(0.03, 0.04, 0.0, 0.0, 0.0, 0.0, 0.005, 0.05, K, 0.0, 0.0)
+    assert t2 == pytest.approx(K * 0.005, rel=1e-12)
 
 
 def test_tension_taut_slack_and_offset():
@@ -35,9 +57,7 @@ def test_spring_forces_action_reaction_and_direction():
     x = np.array([[0.0, 0, 0], [0.0, 0.06, 0], [0.0, 0.0, 0.04]])
     v = np.zeros((3, 3))
     springs = np.array([[0, 1], [0, 2]], dtype=np.int64)
-    f = np.zeros((3, 3)); t = np.zeros(2)
-    accumulate_spring_forces(x, v, springs, np.full(2, L0), np.full(2, K), np.zeros(2), np.zeros(2),
-                             np.zeros(2, dtype=np.bool_), f, t)
+    f, t = production_forces(x, v, springs, L0, K, 0.0, 4e-3)
     # spring 0 taut (0.06 > 0.05): pulls node 0 towards +y, node 1 towards -y; spring 1 slack
     assert t[0] == pytest.approx(K * 0.01) and t[1] == 0.0
     np.testing.assert_allclose(f[0], [0, K * 0.01, 0], atol=1e-12)
@@ -82,13 +102,10 @@ def test_segment_force_is_drag_plus_lift(alpha_deg):
 def test_aero_split_half_to_each_end_and_no_wind_no_force():
     x = np.array([[0.0, 0, 0], [0.05, 0, 0]])
     springs = np.array([[0, 1]], dtype=np.int64)
-    f = np.zeros((2, 3))
     v = np.array([[0.0, 0, 100.0], [0.0, 0, 100.0]])
-    accumulate_aero_forces(x, v, springs, np.full(1, 4e-3), 1.0, np.zeros(3), np.zeros(1, np.bool_), f)
+    f, _ = production_forces(x, v, springs, 1.0, K, 0.0, 4e-3, air=True)  # rest 1 m: slack, aero only
     # broadside (α = 90°): F = ½ ρ 1.122 d l |v|², Eq. (9)-(10): half to each node
     total = 0.5 * 1.0 * 1.122 * 4e-3 * 0.05 * 100.0**2
     np.testing.assert_allclose(f[:, 2], [-total / 2, -total / 2], rtol=1e-13)
-    f[:] = 0
-    accumulate_aero_forces(x, v, springs, np.full(1, 4e-3), 1.0, np.array([0.0, 0, 100.0]),
-                           np.zeros(1, np.bool_), f)
+    f, _ = production_forces(x, v, springs, 1.0, K, 0.0, 4e-3, air=True, wind=(0.0, 0.0, 100.0))
     assert np.all(f == 0.0)  # moving with the wind: no load

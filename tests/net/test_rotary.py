@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from flexnet_fe.net.hybrid import HybridWarp, initial_state as hybrid_initial_state, simulate
+from .hybrid_reference import HybridWarp, initial_state as hybrid_initial_state, simulate
 from flexnet_fe.net.state import Environment, initial_state, step_many
 from flexnet_fe.net.timestep import spring_limit
 
