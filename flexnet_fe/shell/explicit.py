@@ -272,7 +272,8 @@ class Sample:
     strain: float
     """½ uᵀ K u [J]"""
     work: float
-    """accumulated external work, Σ over sample intervals of |Σ_steps f·Δu| [J]"""
+    """accumulated external work Σ f·Δu since t = 0, signed [J] (the instability guard uses
+    Σ over sample intervals of |Σ_steps f·Δu| internally, an upper bound)"""
 
 
 @njit(cache=True)
@@ -328,7 +329,7 @@ def central_difference(op: ShellOperator, loads: LoadHistory, dt: float, n_steps
 
     ke, se = energies()
     e0 = ke + se
-    work = work_local = 0.0
+    work = work_net = work_local = 0.0  # Σ|interval work| (the guard's budget), signed work [J]
     yield Sample(0, 0.0, u, v, ke, se, 0.0)
     for step in range(1, n_steps + 1):
         t = (step - 1) * dt
@@ -345,7 +346,9 @@ def central_difference(op: ShellOperator, loads: LoadHistory, dt: float, n_steps
         if step % sample_every == 0 or step == n_steps:
             tn = step * dt
             ke, se = energies()
-            work += abs(comm.allreduce(work_local, op=MPI.SUM))
+            w_int = comm.allreduce(work_local, op=MPI.SUM)
+            work += abs(w_int)
+            work_net += w_int
             work_local = 0.0
             total = ke + se
             if not np.isfinite(total) or total > growth_limit * (e0 + work):
@@ -353,4 +356,4 @@ def central_difference(op: ShellOperator, loads: LoadHistory, dt: float, n_steps
                     f"shell solver unstable at t = {tn:.6e} s (step {step}): energy {total:.3e} J "
                     f"vs budget {e0 + work:.3e} J; dt = {dt:.4e} s, dt_crit = {dt_crit:.4e} s "
                     f"(dt/dt_crit = {dt / dt_crit:.3f})")
-            yield Sample(step, tn, u, v, ke, se, work)
+            yield Sample(step, tn, u, v, ke, se, work_net)

@@ -340,8 +340,11 @@ class RunState(NamedTuple):
 
 # indices into RunState.scal
 S_STEP, S_WORK, S_WORK_INT, S_E0, S_PEAK_VM, S_PEAK_T, S_PEAK_NODE, S_PEAK_P1, S_PEAK_STEP, \
-    S_PEAK_P1_T, S_NSAMP = range(11)
-N_SCAL = 11
+    S_PEAK_P1_T, S_NSAMP, S_WORK_NET = range(12)
+# S_WORK: Σ over sample intervals of |external work in the interval| [J], the instability
+# guard's energy budget (an upper bound); S_WORK_NET: the signed external work [J] written to
+# the history, so that kinetic + strain − work is the energy balance.
+N_SCAL = 12
 
 
 def new_state(n: int, u0: np.ndarray | None = None, v0: np.ndarray | None = None) -> RunState:
@@ -557,10 +560,11 @@ def advance_steps(D, P, R, St, H, n_steps):
         if step % P.sample_every == 0:
             row = int(sc[S_NSAMP])
             sc[S_WORK] += abs(sc[S_WORK_INT])
+            sc[S_WORK_NET] += sc[S_WORK_INT]
             sc[S_WORK_INT] = 0.0
             H.t[row] = step * P.dt
             H.ke[row] = ke
-            H.work[row] = sc[S_WORK]
+            H.work[row] = sc[S_WORK_NET]
             _sample(R, St, H, sc, row, step, step * P.dt)
             sc[S_NSAMP] = row + 1
             if P.beta != 0.0:
@@ -590,7 +594,7 @@ def _close_sample(H, sc, row, se, limit):
     total = H.ke[row] + se
     if row == 0:
         sc[S_E0] = total
-    return not np.isfinite(total) or total > limit * (sc[S_E0] + H.work[row])
+    return not np.isfinite(total) or total > limit * (sc[S_E0] + sc[S_WORK])
 
 
 @njit(cache=True)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from scipy import sparse
 
 from flexnet_fe.shell import api
@@ -63,3 +64,34 @@ def test_compiled_step_equals_petsc_step_over_1000_steps():
     tip = np.isclose((m.op.x_nodes - ORIGIN) @ A1, 0.3)
     w = a.u.reshape(-1, NDOF_NODE)[tip, :3] @ m.fin.plane.n
     assert np.abs(w).max() <= 1e-12 * scale
+
+
+def test_history_work_closes_the_energy_balance_in_both_backends():
+    """Reference: the work–energy theorem. Undamped (α = β = 0), the kinetic + strain energy
+    equals the external work done on the plate, W = ∫ f·du. The load reverses sign (a full
+    sine period), so the plate moves against it in part of the run and the work of some sample
+    intervals is negative: a history that summed |interval work| (the instability guard's
+    budget, which the history held before) overstates W by those intervals. The history's
+    work f(t_n)·(u_{n+1} − u_n) summed every step, with the kinetic energy of the half-step
+    velocity, closes the balance to first order in dt (measured: 3.7 %, 1.9 %, 0.94 % of the
+    work scale at 0.9, 0.45, 0.225 dt_crit): asserted as the gap halving with dt (ratio 2 ± 10 %)
+    and the same gap from both backends (same scheme)."""
+    sup = {"root": Support.CLAMPED}
+    m = api.plate(10, 6, 0.3, 0.15, MAT, supports=sup, origin=ORIGIN, a1=A1, a2=A2)
+    t = np.linspace(0.0, 2e-3, 201)
+    loads = api.pressure(m, t, 5e3 * np.sin(2 * np.pi * t / 1e-3))
+    lam, _ = max_eigenvalue(m.op)
+    R = recovery_for(m)
+
+    def gap(factor, be):
+        dt = factor * critical_step(lam, 0.0, 0.0)
+        n = int(2e-3 / dt)
+        r = run(m, loads, R, dt=dt, n_steps=n, sample_every=10, frame_every=10 * (n // 10 + 1),
+                backend=be)
+        assert np.diff(r.work).min() < 0.0, "the test load must do negative work somewhere"
+        return np.abs(r.ke + r.se - r.work).max() / np.abs(r.work).max()
+
+    g1, g2 = gap(0.9, Backend.COMPILED), gap(0.45, Backend.COMPILED)
+    assert 1.8 < g1 / g2 < 2.2, (g1, g2)
+    assert g2 < 0.025, g2
+    assert gap(0.9, Backend.PETSC) == pytest.approx(g1, rel=1e-6)
