@@ -108,7 +108,7 @@ def _stage_view(run: RunData, stage: StageInfo) -> dict[str, Any]:
 def _unit_notes(run: RunData, notes: list[str]) -> None:
     for s in run.stages:
         if s.complete:
-            missing = unknown_units(flatten(s.section))
+            missing = [k for k in unknown_units(flatten(s.section)) if k.rsplit(".", 1)[-1] != "warnings"]
             if missing:
                 notes.append(f"summary.json {s.name}: no unit known for " + ", ".join(missing)
                              + " (shown with '?'; add it to flexnet_fe/report/units.py)")

@@ -44,7 +44,9 @@ interval are one merged frame (so no fin is shown more than half an interval awa
 
 DISPLACEMENT = "displacement_m"
 SURFACE_STRESS = tuple(f"{m}_{s}_pa" for m in ("von_mises", "max_principal") for s in ("top", "mid", "bottom"))
-"""The shell stage's six scalar DG0 stress fields [Pa] (shell/stress.py FIELD_NAMES)."""
+"""The per-surface DG0 stress fields [Pa] a fin file may hold; every ``*_pa`` field of the fin's
+file is carried over (today's shell stage writes von Mises per surface as DG0 and recovered nodal
+values as CG1 ``*_nodal_pa``)."""
 MAX_FIELDS = {"von_mises_pa": "von_mises_", "max_principal_pa": "max_principal_"}
 """Cell maxima over the surfaces added to each fin block: name → prefix of the surface fields."""
 ENVELOPE_FIELDS = ("peak_von_mises_pa", "peak_max_principal_pa")
@@ -167,29 +169,39 @@ class _Fin:
     path: Path
 
 
+def _stress_fields(fields: dict) -> tuple[str, ...]:
+    """The fin file's stress fields [Pa] (``*_pa``, cell or node centred) in a stable order."""
+    return tuple(sorted(n for n in fields if n.endswith("_pa")))
+
+
 def _read_fin(path: Path, name: str) -> _Fin:
     mesh = read_mesh(path)
     fields = list_fields(path)
-    missing = [f for f in (DISPLACEMENT, *SURFACE_STRESS) if f not in fields]
-    if missing:
-        raise FlexnetError(f"{path}: missing field(s) {', '.join(missing)}")
+    vm_cells = [n for n in _stress_fields(fields) if n.startswith("von_mises_") and fields[n].center == "Cell"]
+    if DISPLACEMENT not in fields or not vm_cells:
+        raise FlexnetError(f"{path}: needs {DISPLACEMENT} and at least one cell field von_mises_*_pa "
+                           f"(has {', '.join(sorted(fields)) or 'none'})")
     return _Fin(Part(name, mesh.points, mesh.cells, mesh.cell_type), fields,
-                fields["von_mises_top_pa"].times, path)
+                fields[vm_cells[0]].times, path)
 
 
 def _fin_attributes(fin: _Fin, index: int, key: str) -> list:
-    """The fin block's fields at its output ``index`` (see the module doc)."""
+    """The fin block's fields at its output ``index`` (see the module doc): displacement, every
+    stress field of the fin's file with its own centring, and the cell maxima over the surfaces
+    (``MAX_FIELDS``) of the fields present."""
     att = []
     values = {}
-    for name in (DISPLACEMENT, *SURFACE_STRESS):
+    stress = _stress_fields(fin.fields)
+    for name in (DISPLACEMENT, *stress):
         f = fin.fields[name]
         k = f.times.index(fin.times[index]) if fin.times[index] in f.times else nearest_time_index(f.times, fin.times[index])
         values[name] = read_field(fin.path, f, k)
     att.append((DISPLACEMENT, "Node", values[DISPLACEMENT], f"{key}/{DISPLACEMENT}"))
     for name, prefix in MAX_FIELDS.items():
-        stack = np.max([values[n] for n in SURFACE_STRESS if n.startswith(prefix)], axis=0)
-        att.append((name, "Cell", stack, f"{key}/{name}"))
-    att += [(n, "Cell", values[n], f"{key}/{n}") for n in SURFACE_STRESS]
+        surf = [n for n in stress if n.startswith(prefix) and fin.fields[n].center == "Cell"]
+        if surf:
+            att.append((name, "Cell", np.max([values[n] for n in surf], axis=0), f"{key}/{name}"))
+    att += [(n, fin.fields[n].center, values[n], f"{key}/{n}") for n in stress]
     return att
 
 

@@ -47,6 +47,10 @@ NO_UNIT = Unit("?")
 KEY_UNITS: dict[str, Unit] = {
     "ns_per_step": Unit("ns"),                        # wall time per step, already in ns
     "contact_stiffness": Unit("N/m^m (m = contact exponent)"),   # K_n of F = K_n δ^m, Eq. (28)
+    "contact_stiffness_body": Unit("N/m^m (m = contact exponent)"),
+    "contact_stiffness_fin": Unit("N/m^m (m = contact exponent)"),
+    "static_margin_cal": Unit("calibres"),          # (x_cp − x_cg) / body diameter
+    "cm_q": Unit("1/rad"),                            # pitch-damping derivative ∂C_m/∂(q d / 2V)
     "max_attitude_change_rad": Unit("mrad", 1e3),
     "cfc": Unit("CFC class (Hz)"),                    # SAE J211-1 channel frequency class
     "written": Unit("date"),
@@ -58,6 +62,7 @@ KEY_UNITS: dict[str, Unit] = {
 # Longest suffixes first is enforced in unit_of; the order here is for reading.
 SUFFIX_UNITS: dict[str, Unit] = {
     "_s_per_m": Unit("s/m"),
+    "_db": Unit("dB"),
     "_kgpm3": Unit("kg/m³"),
     "_mps2": Unit("m/s²"),
     "_rps2": Unit("rad/s²"),
@@ -91,7 +96,7 @@ COUNT_SUFFIXES = ("_nodes", "_segments", "_crossings", "_unresolved", "_steps", 
 """Suffixes of counts (``free_nodes``, ``segment_crossings_unresolved``)."""
 
 RATIO_PATTERNS = ("_over_", "_ratio", "_fraction", "_factor", "_scale", "damage", "effectiveness",
-                  "multipliers", "_zeta", "efficiency")
+                  "multipliers", "_zeta", "efficiency", "remaining")
 """Substrings of dimensionless keys (``dv_over_v``, ``peak_over_yield``, ``rotary_inertia_scale``)."""
 
 BOOLEAN_KEYS = frozenset({"passed_through", "hit", "tunnelling", "tunnelled", "captured", "converged"})
