@@ -329,6 +329,11 @@ def build_sweep_report(table_csv: Path, parameters: list[str] | None = None) -> 
                       f"Headline quantities vs {parameter_label(p)}; points per panel: "
                       + ", ".join(f"{k} {v}" for k, v in points.items())))
 
+    own = table_csv.with_suffix(".png")  # a picture the sweep driver drew itself (map.csv → map.png)
+    if own.is_file():
+        plots.insert(0, (own.name, f"{own.name}: the sweep's own picture, drawn by the tool that wrote "
+                                   f"{table_csv.name}"))
+
     failed = [r for r in rows if (r.get(ERROR) or "").strip()]
     links = {}
     for r in rows:

@@ -115,3 +115,14 @@ def test_explicit_parameter_must_be_a_column(tmp_path):
         build_sweep_report(table, parameters=["net.youngs_modulus"])
     with pytest.raises(FlexnetError, match="not a sweep/batch table"):
         build_sweep_report(_write(tmp_path / "other.csv", [{"a": 1}]))
+
+
+def test_the_sweeps_own_picture_is_shown(tmp_path):
+    """A driver that draws its own picture beside its table (the engagement map writes map.csv
+    and map.png) gets it at the top of the sweep report; without one nothing is added."""
+    table = _write(tmp_path / "map.csv", _sweep_rows())
+    (tmp_path / "map.png").write_bytes(b"\x89PNG\r\n\x1a\n")
+    tree = parse_html(build_sweep_report(table).read_text())
+    assert tree.images[0] == "map.png" and len(tree.images) == 3
+    (tmp_path / "map.png").unlink()
+    assert "map.png" not in build_sweep_report(table).read_text()
