@@ -1,6 +1,7 @@
 """Offscreen PyVista pictures of the stages' field files (no display needed).
 
-``render_stress`` draws one fin's DG0 stress field from the shell stage's XDMF (written by
+``render_stress`` draws one fin's stress field from the shell stage's XDMF — its recovered nodal
+(CG1 ``*_nodal_pa``) values where the file has them, else the DG0 cell values — (written by
 dolfinx: a ``mesh`` grid plus one temporal collection per scalar field, cell-centred) seen
 normal to the fin plane; ``render_net`` draws net snapshots from a ``.pvd`` collection of line
 meshes (deploy / collide stages). XDMF files are read with :mod:`flexnet_fe.report.xdmf`
@@ -113,6 +114,21 @@ def stress_field(fields: dict[str, np.ndarray]) -> tuple[str, np.ndarray]:
     return "max of " + ", ".join(names), np.max([fields[n] for n in names], axis=0)
 
 
+def _nodal_counterpart(xdmf: Path, label: str, t: float, n_points: int) -> np.ndarray | None:
+    """The recovered nodal field ``<label without _pa>_nodal_pa`` [Pa] (n_points,) of ``xdmf`` at
+    time ``t`` (the envelope: its only time), or None when the file has none."""
+    from flexnet_fe.report.xdmf import list_fields, nearest_time_index, read_field
+
+    if not label.endswith("_pa"):
+        return None
+    f = list_fields(xdmf).get(label[:-3] + "_nodal_pa")
+    if f is None or f.center != "Node":
+        return None
+    k = 0 if len(f.times) == 1 else (f.times.index(t) if t in f.times else nearest_time_index(f.times, t))
+    values = read_field(xdmf, f, k)
+    return values if values.ndim == 1 and len(values) == n_points and np.all(np.isfinite(values)) else None
+
+
 def render_stress(xdmf: Path, png: Path, *, time_s: float | None = None, field: str | None = None,
                   title: str = "", window: tuple[int, int] = (900, 700), mark: list | None = None) -> Picture:
     """Draw a fin's von Mises stress [MPa] (or the named cell ``field``) from ``xdmf`` at the
@@ -135,7 +151,12 @@ def render_stress(xdmf: Path, png: Path, *, time_s: float | None = None, field: 
     mesh = grid.copy()
     mesh.cell_data.clear()
     bar = "stress [MPa]" if label.endswith("_pa") or label.startswith("max of") else label
-    mesh.cell_data[bar] = values * (PA_TO_MPA if bar == "stress [MPa]" else 1.0)
+    nodal = _nodal_counterpart(xdmf, label, t, mesh.n_points)
+    if nodal is not None:  # the shell's recovered nodal stress: smooth, not one value per cell
+        label, values = label[:-3] + "_nodal_pa", nodal
+        mesh.point_data[bar] = values * PA_TO_MPA
+    else:
+        mesh.cell_data[bar] = values * (PA_TO_MPA if bar == "stress [MPa]" else 1.0)
     normal = plane_normal(np.asarray(mesh.points))
     png = Path(png)
     png.parent.mkdir(parents=True, exist_ok=True)
@@ -150,7 +171,7 @@ def render_stress(xdmf: Path, png: Path, *, time_s: float | None = None, field: 
         pl.reset_camera()
         heading = title or xdmf.name
         # the envelope's single time value is a placeholder, not an instant
-        time_txt = "" if math.isnan(t) or label == ENVELOPE_FIELD else f", t = {t * 1e3:.4g} ms"
+        time_txt = "" if math.isnan(t) or label in (ENVELOPE_FIELD, ENVELOPE_FIELD[:-3] + "_nodal_pa") else f", t = {t * 1e3:.4g} ms"
         pl.add_text(f"{heading}\n{label}{time_txt}\nmax {values.max() * PA_TO_MPA:.4g} MPa",
                     font_size=10, position="upper_left")
         if mark is not None:
