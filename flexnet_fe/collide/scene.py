@@ -18,9 +18,8 @@ from flexnet_fe.collide.config import CollideConfig, NetSource
 from flexnet_fe.errors import CaseError, FlexnetError
 from flexnet_fe.missile.geometry import Missile
 from flexnet_fe.missile.shapes import ShapeArrays
-from flexnet_fe.net.deploy import build_net
 from flexnet_fe.net.forces import RopeMaterial, rope_material
-from flexnet_fe.net.topology import NetModel
+from flexnet_fe.net.topology import NetModel, build_net
 from flexnet_fe.rigid import quat_from_matrix
 
 

@@ -304,3 +304,12 @@ def build_rotary(cfg: RotaryNet) -> NetModel:
         boundary_loop=np.asarray(loop, dtype=np.int64), hub_node=0, hub_link=hub_link,
         anchor_angle=anchor, hub_radius=r0, hub_length=cfg.hub_length, hub_inertia=J,
         hub_spin0=cfg.hub_spin)
+
+
+def build_net(net: TractionNet | RotaryNet) -> NetModel:
+    """The NetModel of a ``[net]`` section."""
+    if isinstance(net, TractionNet):
+        return build_traction(net)
+    if isinstance(net, RotaryNet):
+        return build_rotary(net)
+    raise TypeError(f"unknown net section {type(net).__name__}")
