@@ -36,7 +36,7 @@ from pathlib import Path
 import numpy as np
 
 from flexnet_fe.errors import FlexnetError
-from flexnet_fe.report.xdmf import list_fields, nearest_time_index, read_field, read_mesh
+from flexnet_fe.xdmf import list_fields, nearest_time_index, read_field, read_mesh
 
 MERGE_FRACTION = 0.5
 """Output times of different fins closer than this fraction of the smallest median output

@@ -3,7 +3,7 @@
 ``render_stress`` draws one fin's DG0 stress field from the shell stage's XDMF (written by
 dolfinx: a ``mesh`` grid plus one temporal collection per scalar field, cell-centred) seen
 normal to the fin plane; ``render_net`` draws net snapshots from a ``.pvd`` collection of line
-meshes (deploy / collide stages). XDMF files are read with :mod:`flexnet_fe.report.xdmf`
+meshes (deploy / collide stages). XDMF files are read with :mod:`flexnet_fe.xdmf`
 (h5py), not with VTK's XDMF reader (it segfaults on a missing .h5). Rendering uses EGL: ``VTK_DEFAULT_OPENGL_WINDOW`` and
 ``PYVISTA_OFF_SCREEN`` are set (if the caller has not set them) before pyvista is imported.
 
@@ -70,7 +70,7 @@ def plane_normal(points: np.ndarray) -> np.ndarray:
 
 def read_cell_fields(xdmf: Path, time_s: float | None = None):
     """Read a dolfinx XDMF file's cell fields at the output time nearest ``time_s`` (default:
-    the last) with :mod:`flexnet_fe.report.xdmf`.
+    the last) with :mod:`flexnet_fe.xdmf`.
 
     Returns ``(pyvista grid, {name: cell values (n_cells,)}, time shown [s])``. Only scalar
     cell fields at that same time are returned. Raises :class:`FlexnetError` when the file (or
@@ -79,7 +79,7 @@ def read_cell_fields(xdmf: Path, time_s: float | None = None):
     offscreen_env()
     import pyvista as pv
 
-    from flexnet_fe.report.xdmf import list_fields, nearest_time_index, read_field, read_mesh
+    from flexnet_fe.xdmf import list_fields, nearest_time_index, read_field, read_mesh
 
     mesh = read_mesh(xdmf)
     cell_fields = {n: f for n, f in list_fields(xdmf).items() if f.center == "Cell"}
