@@ -83,16 +83,22 @@ def evaluate_tensions(model: NetModel, state: NetState, env: Environment) -> Non
 
 
 @njit(cache=True)
-def _lengths(x, springs, hub_link, anchor, hub, r0, half_length, theta, wrap):
+def _lengths(model, state):
+    """Segment lengths [m] (m,) of a DeployState under a DeployModel (hub links: free part +
+    wound part, the wound angle from ``state.wrap`` updated by the current geometry)."""
+    x = state.x
+    springs, hub, r0 = model.springs, model.hub, model.r0
+    theta = state.hub[0]
     m = springs.shape[0]
     out = np.empty(m)
     for s in range(m):
         j = springs[s, 1]
-        if hub_link[s]:
-            if abs(x[j, 2] - x[hub, 2]) > half_length:
-                gamma, w = theta + anchor[s], 0.0
+        if model.hub_link[s]:
+            if abs(x[j, 2] - x[hub, 2]) > model.half_length:
+                gamma, w = theta + model.anchor[s], 0.0
             else:
-                gamma, w = wrap_geometry(x[j, 0] - x[hub, 0], x[j, 1] - x[hub, 1], theta + anchor[s], r0, wrap[s])
+                gamma, w = wrap_geometry(x[j, 0] - x[hub, 0], x[j, 1] - x[hub, 1], theta + model.anchor[s], r0,
+                                         state.wrap[s])
             d0 = x[j, 0] - x[hub, 0] - r0 * math.cos(gamma)
             d1 = x[j, 1] - x[hub, 1] - r0 * math.sin(gamma)
             d2 = x[j, 2] - x[hub, 2]
@@ -104,10 +110,12 @@ def _lengths(x, springs, hub_link, anchor, hub, r0, half_length, theta, wrap):
     return out
 
 
+_NO_LOADS = Environment(gravity=np.zeros(3), rho=0.0, wind=np.zeros(3), air=False)
+
+
 def segment_lengths(model: NetModel, state: NetState) -> np.ndarray:
     """Current length of each segment [m], shape (m,) (hub links: free part + wound part)."""
-    return _lengths(state.x, model.springs, model.hub_link, model.anchor_angle, model.hub_node,
-                    model.hub_radius, 0.5 * model.hub_length, state.hub[0], state.wrap)
+    return _lengths(kernel_model(model, _NO_LOADS), kernel_state(state))
 
 
 def energies(model: NetModel, state: NetState, gravity=(0.0, 0.0, 0.0)) -> dict[str, float]:
