@@ -33,6 +33,7 @@ from flexnet_fe.errors import FlexnetError
 from flexnet_fe.flight.config import DamageLaw, DamageLawConfig
 from flexnet_fe.io import read_json
 from flexnet_fe.xdmf import list_fields, nearest_time_index, read_field, read_mesh
+from flexnet_fe.runs import ENVELOPE_XDMF, SUMMARY
 
 FIELD = "peak_von_mises_pa"
 WING_PREFIX = "wing_"
@@ -112,7 +113,7 @@ class FinDamage:
 
 def shell_allowables(shell_dir: Path) -> dict[str, float]:
     """Per fin ``allowable_pa`` from the run's summary.json (section ``shell``), where present."""
-    path = Path(shell_dir).parent / "summary.json"
+    path = Path(shell_dir).parent / SUMMARY
     if not path.is_file():
         return {}
     shell = read_json(path).get("shell", {})
@@ -127,7 +128,7 @@ def damage_from_shell(shell_dir: Path, law: DamageLawConfig, material) -> tuple[
     shell_dir = Path(shell_dir)
     allow = shell_allowables(shell_dir)
     lost, used = {}, {}
-    for env in sorted(shell_dir.glob("*/envelope.xdmf")):
+    for env in sorted(shell_dir.glob(f"*/{ENVELOPE_XDMF}")):
         name = env.parent.name
         if name not in FinDamage.NAMES:
             raise FlexnetError(f"{env}: fin '{name}' is not one of {', '.join(FinDamage.NAMES)}")

@@ -32,6 +32,7 @@ from flexnet_fe.net.state import (Environment, NetState, energies, evaluate_tens
 from flexnet_fe.net.timestep import choose_time_step, drag_limit
 from flexnet_fe.net.topology import NetModel, build_net
 from flexnet_fe.progress import progress_bar
+from flexnet_fe.runs import HISTORY, NET_PVD, NET_STATE
 
 
 def net_area(model: NetModel, x: np.ndarray, pixel: float) -> float:
@@ -231,8 +232,8 @@ def _summary(cols: dict, model: NetModel, ts, deploy: DeployConfig, air: Air, sp
         "air": {"on": deploy.air, "altitude_m": air.altitude, "density_kgpm3": air.density,
                 "speed_of_sound_mps": air.speed_of_sound, "flight_speed_mps": speed,
                 "gravity_mps2": air.gravity if deploy.gravity else 0.0},
-        "snapshots": "net.pvd",
-        "state_at_max_area": "net_state.npz",
+        "snapshots": NET_PVD,
+        "state_at_max_area": NET_STATE,
     }
 
 
@@ -255,9 +256,9 @@ def run_deploy(net: TractionNet | RotaryNet, deploy: DeployConfig, air: Air, sta
     rec = _Recorder(model, env, deploy, snap_dir, int(round(deploy.duration / deploy.output_interval)))
     steps = _march(model, state, ts, deploy, rec, log)
 
-    write_history_csv(stage_dir / "history.csv", rec.cols)
-    write_pvd(stage_dir / "net.pvd", rec.snaps)
-    write_net_state(stage_dir / "net_state.npz", model, rec.best)
+    write_history_csv(stage_dir / HISTORY, rec.cols)
+    write_pvd(stage_dir / NET_PVD, rec.snaps)
+    write_net_state(stage_dir / NET_STATE, model, rec.best)
     title = (f"{model.kind} net deployment — air {'on' if deploy.air else 'off'}, "
              f"Mach {deploy.mach:g} at {air.altitude:.0f} m, d = {net.rope_diameter * 1e3:g} mm (world frame W)")
     plot_history(stage_dir / "deploy.png", rec.cols, model.kind, title)

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from flexnet_fe.net.config import RotaryNet, TractionNet, WarpInitialState
+from flexnet_fe.net.forces import RopeMaterial, rope_material
 
 
 @dataclass(frozen=True)
@@ -46,6 +47,9 @@ class NetModel:
     anchor_angle : [rad], shape (m,); 0 where not a hub link.
     hub_radius : r0 [m]; hub_length : axial length H [m]; hub_inertia : J [kg m^2];
     hub_spin0 : initial ω about +z [rad/s].
+    rope : the rope's material (E, ν, ρ, d, transverse modulus, strength), its one home; the
+         builders derive stiffness_ea, diameter and the lumped rope mass from it (None only for
+         hand-built test models).
     """
 
     kind: str
@@ -69,6 +73,7 @@ class NetModel:
     hub_length: float = 0.0
     hub_inertia: float = 0.0
     hub_spin0: float = 0.0
+    rope: RopeMaterial | None = None
 
     def __post_init__(self):
         m = len(self.springs)
@@ -92,7 +97,13 @@ class NetModel:
     @property
     def stiffness(self) -> np.ndarray:
         """Segment stiffness K = EA / l0 [N/m], shape (m,), Eq. (3)."""
-        return self.stiffness_ea / self.rest_length
+        return segment_stiffness(self.stiffness_ea, self.rest_length)
+
+
+def segment_stiffness(ea: np.ndarray, rest: np.ndarray) -> np.ndarray:
+    """Axial stiffness K = EA / l0 [N/m] of segments of rigidity EA [N] and rest length l0 [m],
+    Eq. (3) — the one place it is computed (``NetModel.stiffness``)."""
+    return ea / rest
 
 
 def segment_damping(stiffness: np.ndarray, m_i: np.ndarray, m_j: np.ndarray, zeta: float) -> np.ndarray:
@@ -138,14 +149,16 @@ class _Nodes:
 
 def _rope_segments(cfg: TractionNet | RotaryNet, springs: np.ndarray, rest: np.ndarray, mass: np.ndarray) -> dict:
     """Rope law arrays of NetModel (stiffness_ea, damping, slack_offset, diameter), each (m,),
-    from the ``[net]`` rope fields; ``mass`` (n,) [kg] the node masses incl. concentrated ones.
+    and its ``rope`` material, from the ``[net]`` rope fields; ``mass`` (n,) [kg] the node masses incl. concentrated ones.
     ζ is the damping ratio of a whole mesh bar (k = 1); a bar split into k segments keeps the
     same material viscosity (dashpots in series: c_segment = k c_bar), so refinement converges."""
     k = cfg.subdivisions
-    ea = np.full(len(springs), cfg.youngs_modulus * rope_area(cfg.rope_diameter))
-    damping = k * segment_damping(ea / rest, mass[springs[:, 0]], mass[springs[:, 1]], cfg.damping_ratio)
+    rope = rope_material(cfg)
+    ea = np.full(len(springs), rope.youngs_modulus * rope_area(rope.diameter))
+    damping = k * segment_damping(segment_stiffness(ea, rest), mass[springs[:, 0]], mass[springs[:, 1]],
+                                  cfg.damping_ratio)
     return dict(stiffness_ea=ea, damping=damping, slack_offset=np.full(len(springs), cfg.slack_offset / k),
-                diameter=np.full(len(springs), cfg.rope_diameter))
+                diameter=np.full(len(springs), rope.diameter), rope=rope)
 
 
 def rope_area(diameter: float) -> float:

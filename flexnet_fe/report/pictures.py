@@ -29,6 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from flexnet_fe.errors import FlexnetError
+from flexnet_fe.net.snapshots import pvd_entries
 from flexnet_fe.report.units import PA_TO_MPA
 
 ENVELOPE_FIELD = "peak_von_mises_pa"
@@ -164,20 +165,6 @@ def render_stress(xdmf: Path, png: Path, *, time_s: float | None = None, field: 
     return Picture(png=png, field=label, time_s=t, max_pa=float(values.max()))
 
 
-def pvd_entries(pvd: Path) -> list[tuple[float, Path]]:
-    """(time [s], data file) of every dataset of a ParaView ``.pvd`` collection, by time."""
-    import xml.etree.ElementTree as ET
-
-    pvd = Path(pvd)
-    try:
-        root = ET.parse(pvd).getroot()
-    except (OSError, ET.ParseError) as err:
-        raise FlexnetError(f"{pvd}: cannot read the collection ({err})") from None
-    out = [(float(ds.get("timestep", "nan")), pvd.parent / ds.get("file", ""))
-           for ds in root.iter("DataSet")]
-    return sorted(out, key=lambda e: e[0])
-
-
 def render_net(pvd: Path, png: Path, *, count: int = 6, scalars: str | None = "tension_n",
                title: str = "", window: tuple[int, int] = (1400, 800)) -> list[float]:
     """Draw ``count`` snapshots (evenly spread over the collection) of a net ``.pvd`` side by side
@@ -261,10 +248,10 @@ def _stress_job(xdmf: str, png: str, time_s: float | None = None, title: str = "
 
 def _kinds() -> dict:
     """Job kinds the child process runs: name → function(**args) returning a JSON-able value."""
-    from flexnet_fe.report import scenes
+    from flexnet_fe.report.scenes import render_animation, render_missile_stress, render_net_events
 
-    return {"stress": _stress_job, "missile": scenes.render_missile_stress,
-            "net_events": scenes.render_net_events, "animation": scenes.render_animation,
+    return {"stress": _stress_job, "missile": render_missile_stress,
+            "net_events": render_net_events, "animation": render_animation,
             "net_panels": _net_panels_job}
 
 
