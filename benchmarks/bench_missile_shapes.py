@@ -10,7 +10,7 @@ import numpy as np
 from numba import njit
 
 from flexnet_fe.missile.config import MissileConfig
-from flexnet_fe.missile.geometry import build_missile
+from flexnet_fe.missile.build import build_missile
 from flexnet_fe.missile.mesh import read_msh_nodes_and_cells, write_meshes
 from flexnet_fe.missile.shapes import (body_closest_point, body_closest_scalar, closest_point,
                                        closest_point_scalar, pack_shapes, segment_core_closest)

@@ -242,7 +242,7 @@ def _plate_chart(rows, png: Path) -> None:
 
 def _run_stage(run_dir: Path, mesh_size: float, fins, out: Path, end_time=None) -> dict:
     from flexnet_fe.missile.config import MissileConfig
-    from flexnet_fe.missile.geometry import build_missile
+    from flexnet_fe.missile.build import build_missile
     from flexnet_fe.missile.mesh import write_meshes
     from flexnet_fe.shell.config import ShellConfig
     from flexnet_fe.shell.stage import fin_specs, run_shell

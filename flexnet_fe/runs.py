@@ -8,6 +8,15 @@ Every file name the run machinery writes or reads is named here once::
     <run>/run.lock              the writer's lock (PID, host, start time; flock-held)
     <run>/<stage>/              a finished (or interrupted/failed) stage's files
     <run>/.<stage>.partial/     where a running stage writes; renamed to <stage>/ when it ends
+    <run>/<stage>/history.csv   one row per output time (every stage)
+    <run>/deploy/net_state.npz  the net at maximum area (read by collide); net.pvd snapshots
+    <run>/collide/fin_contacts.npz  contact forces on the fins (read by shell)
+    <run>/shell/<fin>/fields.xdmf, envelope.xdmf  stress frames; peak envelope (read by flight
+                                damage and the report)
+    <run>/report.html           the report
+
+Stages and readers import these names (``HISTORY``, ``NET_STATE``, ``FIN_CONTACTS``,
+``ENVELOPE_XDMF`` ...) instead of writing the literals.
 
 A stage is a function ``run(ctx: StageContext) -> dict`` that writes its files into
 ``ctx.stage_dir`` and returns its section of ``summary.json`` (SI units, JSON-able values).
@@ -42,6 +51,16 @@ SUMMARY = "summary.json"
 LOCK = "run.lock"
 HISTORY = "history.csv"
 STAGE_LOG = "log.txt"
+REPORT = "report.html"
+NET_STATE = "net_state.npz"
+"""deploy/: the net at maximum area, read by collide (``net.deploy.write_net_state``)."""
+NET_PVD = "net.pvd"
+FIN_CONTACTS = "fin_contacts.npz"
+"""collide/: contact forces on the fins, read by shell (fields in DESIGN.md §3)."""
+FIELDS_XDMF = "fields.xdmf"
+"""shell/<fin>/: recovered stress frames."""
+ENVELOPE_XDMF = "envelope.xdmf"
+"""shell/<fin>/: peak-over-time stresses, read by flight damage and the report."""
 SWEEP_TABLE = "sweep.csv"
 BATCH_TABLE = "batch.csv"
 

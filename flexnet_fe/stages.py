@@ -12,7 +12,7 @@ from dataclasses import dataclass
 from enum import Enum
 from typing import Any, Callable
 
-from flexnet_fe.runs import StageContext
+from flexnet_fe.runs import FIN_CONTACTS, HISTORY, StageContext
 
 
 class Stage(str, Enum):
@@ -53,7 +53,7 @@ def shell(ctx: StageContext) -> dict:
     other ranks wait for them; the solver's XDMF/HDF5 writes are collective."""
     from mpi4py import MPI
 
-    from flexnet_fe.missile.geometry import build_missile
+    from flexnet_fe.missile.build import build_missile
     from flexnet_fe.missile.mesh import write_meshes
     from flexnet_fe.shell.stage import fin_specs, run_shell
 
@@ -63,7 +63,7 @@ def shell(ctx: StageContext) -> dict:
     mesh_paths = comm.bcast(mesh_paths, root=0)
     fins = fin_specs(build_missile(c.missile).fins, mesh_paths)
     collide_dir = ctx.stage_output("collide")
-    return run_shell(c.shell, fins, collide_dir / "fin_contacts.npz", collide_dir / "history.csv",
+    return run_shell(c.shell, fins, collide_dir / FIN_CONTACTS, collide_dir / HISTORY,
                      ctx.stage_dir, ctx.log, comm)
 
 

@@ -46,7 +46,7 @@ from flexnet_fe.collide.rigid_body import rigid_step
 from flexnet_fe.contact.law import approach_speed, contact_potential, friction_force, normal_force
 from flexnet_fe.missile.shapes import FIN_PART_OFFSET, segment_body_closest, segment_core_closest
 from flexnet_fe.net.forces import rope_elastic_energy, spring_force
-from flexnet_fe.rigid import quat_to_matrix
+from flexnet_fe.frames import quat_to_matrix
 
 
 @njit(cache=True)

@@ -9,7 +9,7 @@ import numpy as np
 from flexnet_fe.collide.config import CollideConfig
 from flexnet_fe.collide.simulate import CollisionResult
 from flexnet_fe.missile.geometry import Missile
-from flexnet_fe.rigid import quat_to_matrix
+from flexnet_fe.frames import quat_to_matrix
 
 
 def plot_all(res: CollisionResult, missile: Missile, cfg: CollideConfig, out_dir: Path, title: str,

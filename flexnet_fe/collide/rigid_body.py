@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from flexnet_fe.rigid import quat_exp_step, quat_to_matrix
+from flexnet_fe.frames import quat_exp_step, quat_to_matrix
 
 
 @njit(cache=True)

@@ -18,10 +18,10 @@ from flexnet_fe.collide.config import CollideConfig, NetSource
 from flexnet_fe.errors import CaseError, FlexnetError
 from flexnet_fe.missile.geometry import Missile
 from flexnet_fe.missile.shapes import ShapeArrays
-from flexnet_fe.net.deploy import build_net
-from flexnet_fe.net.forces import RopeMaterial, rope_material
-from flexnet_fe.net.topology import NetModel
-from flexnet_fe.rigid import quat_from_matrix
+from flexnet_fe.net.forces import RopeMaterial
+from flexnet_fe.net.topology import NetModel, build_net
+from flexnet_fe.frames import quat_from_matrix
+from flexnet_fe.runs import NET_STATE
 
 
 @dataclass(frozen=True)
@@ -69,7 +69,7 @@ def held_net(net_cfg, source: NetSource, deploy_dir: Path | None) -> HeldNet:
         if deploy_dir is None:
             raise FlexnetError("collide: net_source = 'deploy_max_area' needs the deploy stage's output "
                                "(run the deploy stage first, or set collide.net_source = 'flat_taut')")
-        path = Path(deploy_dir) / "net_state.npz"
+        path = Path(deploy_dir) / NET_STATE
         if not path.is_file():
             raise FlexnetError(f"collide: {path} not found (run the deploy stage first)")
         with np.load(path, allow_pickle=False) as z:
@@ -83,7 +83,7 @@ def held_net(net_cfg, source: NetSource, deploy_dir: Path | None) -> HeldNet:
     rest = np.array(model.rest_length, dtype=np.float64)
     if model.hub_node >= 0:
         rest[model.hub_link] += model.hub_radius
-    return HeldNet(model, x, rest, rope_material(net_cfg), source)
+    return HeldNet(model, x, rest, model.rope, source)
 
 
 def shape_bbox(missile: Missile) -> np.ndarray:

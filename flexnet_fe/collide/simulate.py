@@ -39,7 +39,7 @@ from flexnet_fe.errors import NumericalError
 from flexnet_fe.missile.geometry import Missile
 from flexnet_fe.missile.shapes import pack_shapes, part_names
 from flexnet_fe.progress import progress_bar
-from flexnet_fe.rigid import quat_mul, quat_to_matrix
+from flexnet_fe.frames import quat_mul, quat_to_matrix
 
 
 @dataclass(frozen=True)
@@ -143,7 +143,7 @@ def build(net: HeldNet, missile: Missile, cfg: CollideConfig, gravity: float, lo
     local = np.full(model.n_nodes, -1, dtype=np.int64)
     local[used] = np.arange(used.size)
     seg = np.ascontiguousarray(local[model.springs[seg_idx]])
-    k = np.ascontiguousarray(model.stiffness_ea[seg_idx] / model.rest_length[seg_idx])
+    k = np.ascontiguousarray(model.stiffness[seg_idx])
     mass = np.array(model.mass[used], dtype=np.float64)
     reachable = free_nodes(net.x, aim, start.direction, float(start.bbox[2]))
     if not reachable.any():

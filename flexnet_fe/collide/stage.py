@@ -32,9 +32,11 @@ from flexnet_fe.collide.scene import held_net
 from flexnet_fe.collide.simulate import CollisionResult, simulate
 from flexnet_fe.io import write_history_csv
 from flexnet_fe.missile.config import MissileConfig
-from flexnet_fe.missile.geometry import Missile, build_missile
+from flexnet_fe.missile.geometry import Missile
+from flexnet_fe.missile.build import build_missile
 from flexnet_fe.net.snapshots import write_pvd, write_vtu
-from flexnet_fe.rigid import quat_to_matrix
+from flexnet_fe.frames import quat_to_matrix
+from flexnet_fe.runs import FIN_CONTACTS, HISTORY, NET_PVD
 
 
 def run_collide(net_cfg, deploy_cfg, missile_cfg: MissileConfig, collide_cfg: CollideConfig, air: Air,
@@ -54,7 +56,7 @@ def run_collide(net_cfg, deploy_cfg, missile_cfg: MissileConfig, collide_cfg: Co
              missile.mass, collide_cfg.impact_speed, collide_cfg.incidence_angle, *collide_cfg.aim_point)
     res = simulate(net, missile, collide_cfg, air.gravity, log)
     write_outputs(res, net.model.springs[res.alive], net.rest_length[res.alive],
-                  (net.model.stiffness_ea / net.model.rest_length)[res.alive], missile, stage_dir)
+                  net.model.stiffness[res.alive], missile, stage_dir)
     from flexnet_fe.collide.plots import plot_all
 
     plot_all(res, missile, collide_cfg, stage_dir, title=f"{missile.name} missile vs {net.model.kind} net")
@@ -72,9 +74,9 @@ def run_collide(net_cfg, deploy_cfg, missile_cfg: MissileConfig, collide_cfg: Co
 def write_outputs(res: CollisionResult, springs: np.ndarray, rest: np.ndarray, k: np.ndarray,
                   missile: Missile, stage_dir: Path) -> None:
     """history.csv, fin_contacts.npz, accel_body.npz and the snapshots (see the module doc)."""
-    write_history_csv(stage_dir / "history.csv", res.history)
+    write_history_csv(stage_dir / HISTORY, res.history)
     ld = res.loads
-    np.savez(stage_dir / "fin_contacts.npz", fin_names=ld.fin_names.astype(str), t=ld.t,
+    np.savez(stage_dir / FIN_CONTACTS, fin_names=ld.fin_names.astype(str), t=ld.t,
              row_start=ld.row_start.astype(np.int64), fin=ld.fin.astype(np.int32), point=ld.point,
              force=ld.force, width=ld.width)
     h = res.history
@@ -96,7 +98,7 @@ def write_outputs(res: CollisionResult, springs: np.ndarray, rest: np.ndarray, k
         name = f"missile_{i:04d}.vtu"
         _write_lines(snap / name, pts, wire_lines)
         mis_entries.append((float(t), f"snapshots/{name}"))
-    write_pvd(stage_dir / "net.pvd", net_entries)
+    write_pvd(stage_dir / NET_PVD, net_entries)
     write_pvd(stage_dir / "missile.pvd", mis_entries)
 
 

@@ -24,16 +24,16 @@ A fin the shell stage did not solve counts as undamaged.
 
 from __future__ import annotations
 
-import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 from pathlib import Path
 
-import h5py
 import numpy as np
 
 from flexnet_fe.errors import FlexnetError
 from flexnet_fe.flight.config import DamageLaw, DamageLawConfig
 from flexnet_fe.io import read_json
+from flexnet_fe.xdmf import list_fields, nearest_time_index, read_field, read_mesh
+from flexnet_fe.runs import ENVELOPE_XDMF, SUMMARY
 
 FIELD = "peak_von_mises_pa"
 WING_PREFIX = "wing_"
@@ -54,31 +54,23 @@ def cell_areas(points: np.ndarray, cells: np.ndarray) -> np.ndarray:
     raise FlexnetError(f"cells with {cells.shape[1]} nodes: only triangles and quadrilaterals are supported")
 
 
-def _h5_item(xdmf: Path, item: ET.Element) -> np.ndarray:
-    file, _, dataset = item.text.strip().partition(":")
-    with h5py.File(xdmf.parent / file, "r") as h5:
-        return np.asarray(h5[dataset])
-
-
 def read_cell_field(xdmf: Path, name: str = FIELD) -> tuple[np.ndarray, np.ndarray]:
     """(cell areas [m²] (n,), last written values of cell field ``name`` (n,)) from a dolfinx
-    XDMF file with one mesh (serial layout, as the shell stage writes it)."""
+    XDMF file with one mesh (serial layout, as the shell stage writes it), read with the
+    package's one XDMF reader (``flexnet_fe.xdmf``, also used by the report)."""
     xdmf = Path(xdmf)
     if not xdmf.is_file():
         raise FlexnetError(f"{xdmf}: no such file (shell stage output)")
-    root = ET.parse(xdmf).getroot()
-    mesh = root.find(".//Grid[@GridType='Uniform']")
-    cells = _h5_item(xdmf, mesh.find("Topology/DataItem")).astype(np.int64)
-    points = _h5_item(xdmf, mesh.find("Geometry/DataItem"))
-    attrs = [a for a in root.iter("Attribute") if a.get("Name") == name]
-    if not attrs:
+    mesh = read_mesh(xdmf)
+    field = list_fields(xdmf).get(name)
+    if field is None:
         raise FlexnetError(f"{xdmf}: no cell field '{name}'")
-    if attrs[-1].get("Center") != "Cell":
+    if field.center != "Cell":
         raise FlexnetError(f"{xdmf}: field '{name}' is not a cell field")
-    values = _h5_item(xdmf, attrs[-1].find("DataItem")).reshape(-1)
-    if len(values) != len(cells):
-        raise FlexnetError(f"{xdmf}: {len(values)} values for {len(cells)} cells")
-    return cell_areas(points, cells), values
+    values = read_field(xdmf, field, nearest_time_index(field.times, None)).reshape(-1)
+    if len(values) != len(mesh.cells):
+        raise FlexnetError(f"{xdmf}: {len(values)} values for {len(mesh.cells)} cells")
+    return cell_areas(mesh.points, mesh.cells), values
 
 
 def neuber_strain(stress: np.ndarray, youngs_modulus: float, yield_strength: float) -> np.ndarray:
@@ -121,7 +113,7 @@ class FinDamage:
 
 def shell_allowables(shell_dir: Path) -> dict[str, float]:
     """Per fin ``allowable_pa`` from the run's summary.json (section ``shell``), where present."""
-    path = Path(shell_dir).parent / "summary.json"
+    path = Path(shell_dir).parent / SUMMARY
     if not path.is_file():
         return {}
     shell = read_json(path).get("shell", {})
@@ -136,7 +128,7 @@ def damage_from_shell(shell_dir: Path, law: DamageLawConfig, material) -> tuple[
     shell_dir = Path(shell_dir)
     allow = shell_allowables(shell_dir)
     lost, used = {}, {}
-    for env in sorted(shell_dir.glob("*/envelope.xdmf")):
+    for env in sorted(shell_dir.glob(f"*/{ENVELOPE_XDMF}")):
         name = env.parent.name
         if name not in FinDamage.NAMES:
             raise FlexnetError(f"{env}: fin '{name}' is not one of {', '.join(FinDamage.NAMES)}")

@@ -26,6 +26,8 @@ from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 
+from flexnet_fe.runs import STATUS, SUMMARY
+
 STAGES = ("deploy", "collide", "shell", "flight")
 COLUMNS = ("label", "case", "aim_x_m", "aim_y_m", "incidence_deg", "miss_distance_m", "hit",
            "min_fin_margin", "critical_fin", "wing_damage", "rudder_effectiveness", "error")
@@ -78,14 +80,14 @@ def run_point(point: MapPoint, out: str) -> dict:
     run_dir = Path(out) / point.label
     row = {"label": point.label, "case": Path(point.case).name, "aim_x_m": point.aim_x_m,
            "aim_y_m": point.aim_y_m, "incidence_deg": point.incidence_deg, "error": ""}
-    status = run_dir / "status.json"
+    status = run_dir / STATUS
     try:
         done = status.is_file() and all(json.loads(status.read_text())["stages"].get(s, {}).get("state") == "done"
                                         for s in STAGES)
         if not done:
             case, case_dir = load_case(Path(point.case), point.overrides())
             run_case(case, case_dir, run_dir, [Stage(s) for s in STAGES])
-        row.update(outcome(json.loads((run_dir / "summary.json").read_text())))
+        row.update(outcome(json.loads((run_dir / SUMMARY).read_text())))
     except (FlexnetError, ArithmeticError, ValueError, RuntimeError, KeyError) as err:
         row["error"] = str(err).replace("\n", " ")
     return row

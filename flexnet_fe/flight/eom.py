@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from flexnet_fe.rigid import quat_mul
+from flexnet_fe.frames import quat_mul
 
 
 @njit(cache=True)

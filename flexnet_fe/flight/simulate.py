@@ -33,7 +33,7 @@ from flexnet_fe.flight.airframe import Airframe
 from flexnet_fe.flight.eom import euler_rates, quat_rate
 from flexnet_fe.flight.guidance import closing_speed, first_order_lag_rate, los_rate, pn_command
 from flexnet_fe.flight.target import level_turn
-from flexnet_fe.rigid import quat_to_matrix
+from flexnet_fe.frames import quat_to_matrix
 
 POS, VEL, QUAT, RATE, FIN, FIN_RATE, INTEG, LOS = 0, 3, 6, 10, 13, 17, 21, 23
 N_STATE = 26

@@ -31,8 +31,9 @@ from flexnet_fe.flight.miss import closest_approach
 from flexnet_fe.flight.target import level_turn, turn_rate
 from flexnet_fe.io import atomic_write_json, write_history_csv
 from flexnet_fe.missile.config import MissileConfig
-from flexnet_fe.missile.geometry import build_missile
-from flexnet_fe.rigid import quat_from_matrix
+from flexnet_fe.missile.build import build_missile
+from flexnet_fe.frames import quat_from_matrix
+from flexnet_fe.runs import HISTORY
 
 G0 = 9.80665
 """standard gravity [m/s²], used only to express accelerations in g for people"""
@@ -404,7 +405,7 @@ def run_flight(flight: FlightConfig, altitude_m: float, stage_dir: Path, log: lo
                         "linear aerodynamics' range; the trajectory after that is qualitative")
         log.warning(warnings[-1])
     cols = history_columns(res, flight)
-    write_history_csv(stage_dir / "history.csv", cols)
+    write_history_csv(stage_dir / HISTORY, cols)
     plots.plot_engagement(cols, flight, stage_dir)
     if flight.sweep is not None:
         summary["sweep"] = run_flight_sweep(flight, altitude_m, stage_dir, log, missile)

@@ -26,7 +26,7 @@ from enum import Enum
 
 import numpy as np
 
-from flexnet_fe.missile.config import FinMaterial, FinSetConfig, MassModel, MissileConfig, NoseShape
+from flexnet_fe.missile.config import FinMaterial, FinSetConfig, MissileConfig, NoseShape
 
 EDGE_NAMES: tuple[str, str, str, str] = ("root", "leading_edge", "tip", "trailing_edge")
 """Fin edge k joins corner k to corner k+1 (mod 4); these are also the mesh physical groups."""
@@ -206,22 +206,3 @@ def build_fins(cfg: MissileConfig) -> tuple[Fin, ...]:
             fins.append(build_fin(f"{kind.value}_{i + 1}", kind, len(fins), fs, roll, R,
                                   cfg.material))
     return tuple(fins)
-
-
-def build_missile(cfg: MissileConfig) -> Missile:
-    """The rigid missile of a validated ``[missile]`` table (mass model per ``cfg.mass_model``)."""
-    from flexnet_fe.missile.mass import missile_mass_properties
-
-    R = 0.5 * cfg.body_diameter
-    profile = body_profile(cfg.body_length, R, cfg.nose_shape, cfg.nose_length)
-    fins = build_fins(cfg)
-    if cfg.mass_model is MassModel.UNIFORM_DENSITY:
-        mass, cg, inertia = missile_mass_properties(
-            cfg.body_length, R, cfg.nose_shape, cfg.nose_length, cfg.body_density, fins)
-    elif cfg.mass_model is MassModel.GIVEN:
-        mass, cg, inertia = cfg.mass, np.array(cfg.cg), np.array(cfg.inertia)
-    else:
-        raise ValueError(f"unknown mass model {cfg.mass_model!r}")
-    return Missile(name=cfg.name, length=cfg.body_length, radius=R, nose_shape=cfg.nose_shape,
-                   nose_length=cfg.nose_length, profile=profile, fins=fins, mass=float(mass),
-                   cg=_frozen(cg), inertia=_frozen(inertia))

@@ -26,7 +26,8 @@ from pathlib import Path
 import numpy as np
 
 from flexnet_fe.missile.config import MissileConfig
-from flexnet_fe.missile.geometry import EDGE_NAMES, Fin, Missile, PrimKind, build_missile
+from flexnet_fe.missile.geometry import EDGE_NAMES, Fin, Missile, PrimKind
+from flexnet_fe.missile.build import build_missile
 
 PHYSICAL_TAGS: dict[str, int] = {"surface": 1, "root": 11, "leading_edge": 12, "tip": 13,
                                  "trailing_edge": 14}

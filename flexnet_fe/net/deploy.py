@@ -30,17 +30,9 @@ from flexnet_fe.net.snapshots import write_pvd, write_vtu
 from flexnet_fe.net.state import (Environment, NetState, energies, evaluate_tensions, initial_state,
                                   step_many)
 from flexnet_fe.net.timestep import choose_time_step, drag_limit
-from flexnet_fe.net.topology import NetModel, build_rotary, build_traction
+from flexnet_fe.net.topology import NetModel, build_net
 from flexnet_fe.progress import progress_bar
-
-
-def build_net(net: TractionNet | RotaryNet) -> NetModel:
-    """The NetModel of a ``[net]`` section."""
-    if isinstance(net, TractionNet):
-        return build_traction(net)
-    if isinstance(net, RotaryNet):
-        return build_rotary(net)
-    raise TypeError(f"unknown net section {type(net).__name__}")
+from flexnet_fe.runs import HISTORY, NET_PVD, NET_STATE
 
 
 def net_area(model: NetModel, x: np.ndarray, pixel: float) -> float:
@@ -75,21 +67,66 @@ def hub_nodes_inside(model: NetModel, state: NetState) -> np.ndarray:
     return np.flatnonzero(inside)
 
 
-def run_deploy(net: TractionNet | RotaryNet, deploy: DeployConfig, air: Air, stage_dir: Path,
-               log: logging.Logger) -> dict:
-    """Simulate the deployment and write its outputs; returns the ``deploy`` summary section
-    (SI units): max_area_m2, time_to_max_area_s, initial_area_m2, period_s, max_tension_n,
-    steps, dt_s, wall_s, plus the first opening's maximum (``first_max_area_m2`` at
-    ``time_to_first_max_area_s``), dt limits, snapshot and state file names, air state.
-    ``max_area_m2`` is the largest area over the whole simulated time; ``net_state.npz`` holds
-    the state at that instant."""
-    wall0 = time.perf_counter()
-    stage_dir = Path(stage_dir)
-    snap_dir = stage_dir / "snapshots"
-    snap_dir.mkdir(parents=True, exist_ok=True)
-    for old in snap_dir.glob("net_*.vtu"):  # a re-run replaces the previous series
-        old.unlink()
+HISTORY_COLUMNS = (
+    "t_s", "area_m2", "area_loop_m2", "mass_speed_rel_mps", "mass_speed_mps", "max_tension_n",
+    "mass_rope_tension_n", "peak_tension_interval_n", "hub_spin_radps", "hub_wrap_max_rad", "com_speed_z_mps",
+    "kinetic_energy_rel_j", "elastic_energy_j", "dt_s", "dt_drag_limit_s", "drag_number")
+"""Columns of the deploy ``history.csv`` (units in the names)."""
 
+
+class _Recorder:
+    """One history row per output time, the VTU snapshots, the shapes for ``shapes.png`` and
+    the state at maximum area."""
+
+    def __init__(self, model: NetModel, env: Environment, deploy: DeployConfig, snap_dir: Path, n_out: int):
+        self.model, self.env, self.deploy, self.snap_dir = model, env, deploy, snap_dir
+        self.cols = {k: np.zeros(n_out + 1) for k in HISTORY_COLUMNS}
+        self.snaps: list[tuple[float, str]] = []
+        self.shapes: list[tuple[float, np.ndarray]] = []
+        self.best = {"area": -1.0}
+        self.snap_every = max(1, int(round(deploy.snapshot_interval / deploy.output_interval)))
+        self.shape_ks = set(np.linspace(0, n_out, 8).round().astype(int).tolist())
+        # segments that end on a corner / tip mass (the ropes pulling the masses back)
+        self.at_mass = np.isin(model.springs, model.mass_nodes).any(axis=1)
+
+    def record(self, k: int, state: NetState, peak: float) -> None:
+        """Row ``k`` from ``state``; ``peak`` [N] the largest tension of the interval ending here."""
+        model, cols = self.model, self.cols
+        evaluate_tensions(model, state, self.env)  # at this row's state (the kernel's are a step old)
+        x, v = state.x, state.v
+        mtot = model.mass.sum()
+        vcom = (model.mass[:, None] * v).sum(axis=0) / mtot
+        mv = v[model.mass_nodes]
+        cols["t_s"][k] = state.t
+        area = net_area(model, x, self.deploy.area_pixel)
+        cols["area_m2"][k] = area
+        cols["area_loop_m2"][k] = loop_area(x[:, :2], model.boundary_loop)
+        cols["mass_speed_rel_mps"][k] = float(np.linalg.norm(mv - vcom, axis=1).mean())
+        cols["mass_speed_mps"][k] = float(np.linalg.norm(mv, axis=1).mean())
+        cols["max_tension_n"][k] = float(state.tension.max())
+        cols["mass_rope_tension_n"][k] = float(state.tension[self.at_mass].mean())
+        cols["peak_tension_interval_n"][k] = peak
+        cols["hub_spin_radps"][k] = state.hub[1] if model.hub_node >= 0 else 0.0
+        cols["hub_wrap_max_rad"][k] = float(np.abs(state.wrap).max())
+        cols["com_speed_z_mps"][k] = vcom[2]
+        e = energies(model, state)
+        cols["kinetic_energy_rel_j"][k] = e["kinetic"] - 0.5 * mtot * float(vcom @ vcom)  # about the CoM
+        cols["elastic_energy_j"][k] = e["elastic"]
+        cols["dt_drag_limit_s"][k] = drag_limit(model, x, v, self.env.rho)
+        if k in self.shape_ks:
+            self.shapes.append((state.t, x[:, :2].copy()))
+        if area > self.best["area"]:
+            self.best.update(area=area, t=state.t, x=x.copy(), v=v.copy(), hub=state.hub.copy(),
+                             wrap=state.wrap.copy())
+        if k % self.snap_every == 0:
+            name = f"net_{k // self.snap_every:05d}.vtu"
+            write_vtu(self.snap_dir / name, x, v, model.springs, state.tension)
+            self.snaps.append((state.t, f"snapshots/{name}"))
+
+
+def _setup(net: TractionNet | RotaryNet, deploy: DeployConfig, air: Air, log: logging.Logger):
+    """The model, its t = 0 state, the loads and the time-step choice; logs them.
+    Returns (model, state, env, ts, flight speed [m/s])."""
     model = build_net(net)
     speed = deploy.mach * air.speed_of_sound
     state = initial_state(model, (0.0, 0.0, speed))
@@ -97,8 +134,6 @@ def run_deploy(net: TractionNet | RotaryNet, deploy: DeployConfig, air: Air, sta
     env = Environment(gravity=np.array([0.0, -air.gravity if deploy.gravity else 0.0, 0.0]),
                       rho=rho, wind=np.zeros(3), air=deploy.air)
     ts = choose_time_step(model, state.x, state.v, rho, deploy.safety_factor, deploy.time_step)
-    n_out = int(round(deploy.duration / deploy.output_interval))
-    snap_every = max(1, int(round(deploy.snapshot_interval / deploy.output_interval)))
     log.info("net %s: %d nodes, %d segments, net mass %.4g kg", model.kind, model.n_nodes,
              model.n_springs, float(model.mass.sum()))
     log.info("air %s (rho = %.4g kg/m^3 at %.0f m), gravity %s, flight speed %.1f m/s (Mach %.2f)",
@@ -108,70 +143,38 @@ def run_deploy(net: TractionNet | RotaryNet, deploy: DeployConfig, air: Air, sta
              "re-derived from the drag limit of the current state every output interval %.4g s",
              ts.dt, "forced" if ts.forced else "from physics", ts.spring_limit, ts.drag_limit,
              deploy.safety_factor, deploy.output_interval)
+    return model, state, env, ts, speed
 
-    cols = {k: np.zeros(n_out + 1) for k in (
-        "t_s", "area_m2", "area_loop_m2", "mass_speed_rel_mps", "mass_speed_mps", "max_tension_n",
-        "mass_rope_tension_n",
-        "peak_tension_interval_n", "hub_spin_radps", "hub_wrap_max_rad", "com_speed_z_mps",
-        "kinetic_energy_rel_j", "elastic_energy_j", "dt_s", "dt_drag_limit_s", "drag_number")}
-    snaps: list[tuple[float, str]] = []
-    # segments that end on a corner / tip mass (the ropes pulling the masses back)
-    at_mass = np.isin(model.springs, model.mass_nodes).any(axis=1)
-    shape_ks = set(np.linspace(0, n_out, 8).round().astype(int).tolist())
-    shapes: list[tuple[float, np.ndarray]] = []
-    best = {"area": -1.0}
 
-    def record(k: int, peak: float) -> None:
-        evaluate_tensions(model, state, env)  # at this row's state (the kernel's are a step old)
-        x, v = state.x, state.v
-        mtot = model.mass.sum()
-        vcom = (model.mass[:, None] * v).sum(axis=0) / mtot
-        mv = v[model.mass_nodes]
-        cols["t_s"][k] = state.t
-        area = net_area(model, x, deploy.area_pixel)
-        cols["area_m2"][k] = area
-        cols["area_loop_m2"][k] = loop_area(x[:, :2], model.boundary_loop)
-        cols["mass_speed_rel_mps"][k] = float(np.linalg.norm(mv - vcom, axis=1).mean())
-        cols["mass_speed_mps"][k] = float(np.linalg.norm(mv, axis=1).mean())
-        cols["max_tension_n"][k] = float(state.tension.max())
-        cols["mass_rope_tension_n"][k] = float(state.tension[at_mass].mean())
-        cols["peak_tension_interval_n"][k] = peak
-        cols["hub_spin_radps"][k] = state.hub[1] if model.hub_node >= 0 else 0.0
-        cols["hub_wrap_max_rad"][k] = float(np.abs(state.wrap).max())
-        cols["com_speed_z_mps"][k] = vcom[2]
-        e = energies(model, state)
-        cols["kinetic_energy_rel_j"][k] = e["kinetic"] - 0.5 * mtot * float(vcom @ vcom)  # about the CoM
-        cols["elastic_energy_j"][k] = e["elastic"]
-        cols["dt_drag_limit_s"][k] = drag_limit(model, x, v, rho)
-        if k in shape_ks:
-            shapes.append((state.t, x[:, :2].copy()))
-        if area > best["area"]:
-            best.update(area=area, t=state.t, x=x.copy(), v=v.copy(), hub=state.hub.copy(),
-                        wrap=state.wrap.copy())
-        if k % snap_every == 0:
-            name = f"net_{k // snap_every:05d}.vtu"
-            write_vtu(snap_dir / name, x, v, model.springs, state.tension)
-            snaps.append((state.t, f"snapshots/{name}"))
+def _substeps(ts, deploy: DeployConfig, drag_lim: float, t: float) -> tuple[int, float]:
+    """(steps in the next output interval, stability limit [s]): the spring limit is fixed
+    (linear ropes), the drag limit ``drag_lim`` [s] follows the state at ``t`` [s]. A forced
+    step above the limit raises."""
+    lim = min(ts.spring_limit, drag_lim)
+    if ts.forced:
+        if ts.dt > lim:
+            raise NumericalError(
+                f"forced time step dt = {ts.dt:.4g} s exceeds the stability limit "
+                f"{lim:.4g} s at t = {t:.4g} s (springs {ts.spring_limit:.4g} s, drag "
+                f"{drag_lim:.4g} s)")
+        return int(math.ceil(deploy.output_interval / ts.dt - 1e-9)), lim
+    return int(math.ceil(deploy.output_interval / (deploy.safety_factor * lim))), lim
 
+
+def _march(model: NetModel, state: NetState, ts, deploy: DeployConfig, rec: _Recorder,
+           log: logging.Logger) -> int:
+    """Advance through every output interval, recording each; returns the number of steps."""
+    n_out = len(rec.cols["t_s"]) - 1
+    cols = rec.cols
     cols["dt_s"][0] = ts.dt
-    record(0, 0.0)
+    rec.record(0, state, 0.0)
     steps = 0
     warned_inside = False
     with progress_bar(n_out, f"deploy {model.kind}") as bar:
         for k in range(1, n_out + 1):
-            # the spring limit is fixed (linear ropes); the drag limit follows the state
-            lim = min(ts.spring_limit, cols["dt_drag_limit_s"][k - 1])
-            if ts.forced:
-                if ts.dt > lim:
-                    raise NumericalError(
-                        f"forced time step dt = {ts.dt:.4g} s exceeds the stability limit "
-                        f"{lim:.4g} s at t = {state.t:.4g} s (springs {ts.spring_limit:.4g} s, drag "
-                        f"{cols['dt_drag_limit_s'][k - 1]:.4g} s)")
-                sub = int(math.ceil(deploy.output_interval / ts.dt - 1e-9))
-            else:
-                sub = int(math.ceil(deploy.output_interval / (deploy.safety_factor * lim)))
+            sub, lim = _substeps(ts, deploy, cols["dt_drag_limit_s"][k - 1], state.t)
             dt = deploy.output_interval / sub  # outputs fall on steps; dt <= safety × limit
-            peak, drag_number = step_many(model, state, env, dt, sub, lim)
+            peak, drag_number = step_many(model, state, rec.env, dt, sub, lim)
             steps += sub
             state.t = k * deploy.output_interval  # remove round-off drift of the summed steps
             if drag_number > 2.0:
@@ -186,12 +189,15 @@ def run_deploy(net: TractionNet | RotaryNet, deploy: DeployConfig, air: Air, sta
                                 "contact is not modelled; reported once)", state.t, inside.tolist())
             cols["dt_s"][k] = dt
             cols["drag_number"][k] = drag_number
-            record(k, peak)
+            rec.record(k, state, peak)
             bar.update(1)
+    return steps
 
-    write_history_csv(stage_dir / "history.csv", cols)
-    write_pvd(stage_dir / "net.pvd", snaps)
-    np.savez(stage_dir / "net_state.npz", kind=np.array(model.kind), t=best["t"], x=best["x"],
+
+def write_net_state(path: Path, model: NetModel, best: dict) -> None:
+    """``net_state.npz`` (allow_pickle=False): the state ``best`` (t, x, v, hub, wrap) plus the
+    topology arrays, for the collision stage."""
+    np.savez(path, kind=np.array(model.kind), t=best["t"], x=best["x"],
              v=best["v"], hub=best["hub"], wrap=best["wrap"], mass=model.mass, springs=model.springs,
              rest_length=model.rest_length, stiffness_ea=model.stiffness_ea,
              damping=model.damping, slack_offset=model.slack_offset, diameter=model.diameter,
@@ -199,16 +205,14 @@ def run_deploy(net: TractionNet | RotaryNet, deploy: DeployConfig, air: Air, sta
              hub_link=model.hub_link, anchor_angle=model.anchor_angle,
              hub_node=model.hub_node, hub_radius=model.hub_radius, hub_length=model.hub_length,
              hub_inertia=model.hub_inertia)
-    title = (f"{model.kind} net deployment — air {'on' if deploy.air else 'off'}, "
-             f"Mach {deploy.mach:g} at {air.altitude:.0f} m, d = {net.rope_diameter * 1e3:g} mm (world frame W)")
-    plot_history(stage_dir / "deploy.png", cols, model.kind, title)
-    plot_shapes(stage_dir / "shapes.png", shapes, model.springs,
-                f"{model.kind} net, projection on the world x–y plane (normal to the flight direction)")
 
+
+def _summary(cols: dict, model: NetModel, ts, deploy: DeployConfig, air: Air, speed: float, steps: int) -> dict:
+    """The ``deploy`` summary section from the history columns (SI units)."""
     i_max = int(np.argmax(cols["area_m2"]))
     peaks = area_peaks(cols["area_m2"])
     i_first = int(peaks[0]) if len(peaks) else i_max
-    summary = {
+    return {
         "max_area_m2": float(cols["area_m2"][i_max]),
         "time_to_max_area_s": float(cols["t_s"][i_max]),
         "first_max_area_m2": float(cols["area_m2"][i_first]),
@@ -228,9 +232,40 @@ def run_deploy(net: TractionNet | RotaryNet, deploy: DeployConfig, air: Air, sta
         "air": {"on": deploy.air, "altitude_m": air.altitude, "density_kgpm3": air.density,
                 "speed_of_sound_mps": air.speed_of_sound, "flight_speed_mps": speed,
                 "gravity_mps2": air.gravity if deploy.gravity else 0.0},
-        "snapshots": "net.pvd",
-        "state_at_max_area": "net_state.npz",
+        "snapshots": NET_PVD,
+        "state_at_max_area": NET_STATE,
     }
+
+
+def run_deploy(net: TractionNet | RotaryNet, deploy: DeployConfig, air: Air, stage_dir: Path,
+               log: logging.Logger) -> dict:
+    """Simulate the deployment and write its outputs; returns the ``deploy`` summary section
+    (SI units): max_area_m2, time_to_max_area_s, initial_area_m2, period_s, max_tension_n,
+    steps, dt_s, wall_s, plus the first opening's maximum (``first_max_area_m2`` at
+    ``time_to_first_max_area_s``), dt limits, snapshot and state file names, air state.
+    ``max_area_m2`` is the largest area over the whole simulated time; ``net_state.npz`` holds
+    the state at that instant."""
+    wall0 = time.perf_counter()
+    stage_dir = Path(stage_dir)
+    snap_dir = stage_dir / "snapshots"
+    snap_dir.mkdir(parents=True, exist_ok=True)
+    for old in snap_dir.glob("net_*.vtu"):  # a re-run replaces the previous series
+        old.unlink()
+
+    model, state, env, ts, speed = _setup(net, deploy, air, log)
+    rec = _Recorder(model, env, deploy, snap_dir, int(round(deploy.duration / deploy.output_interval)))
+    steps = _march(model, state, ts, deploy, rec, log)
+
+    write_history_csv(stage_dir / HISTORY, rec.cols)
+    write_pvd(stage_dir / NET_PVD, rec.snaps)
+    write_net_state(stage_dir / NET_STATE, model, rec.best)
+    title = (f"{model.kind} net deployment — air {'on' if deploy.air else 'off'}, "
+             f"Mach {deploy.mach:g} at {air.altitude:.0f} m, d = {net.rope_diameter * 1e3:g} mm (world frame W)")
+    plot_history(stage_dir / "deploy.png", rec.cols, model.kind, title)
+    plot_shapes(stage_dir / "shapes.png", rec.shapes, model.springs,
+                f"{model.kind} net, projection on the world x–y plane (normal to the flight direction)")
+
+    summary = _summary(rec.cols, model, ts, deploy, air, speed, steps)
     summary["wall_s"] = time.perf_counter() - wall0
     log.info("max area %.2f m^2 at t = %.3f s (initial %.2f m^2), period %s s, max tension %.4g N, %.1f s wall",
              summary["max_area_m2"], summary["time_to_max_area_s"], summary["initial_area_m2"],

@@ -10,34 +10,89 @@ lagged velocity the stability limit is ω dt <= 2 (√(1+ζ²) - ζ) (see ``time
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
 
 from flexnet_fe.net.forces import C_CROSS, CD_FRICTION, segment_aero_force, spring_force
+from flexnet_fe.net.hub import hub_link_state
 
 C_MAX = CD_FRICTION + C_CROSS
-from flexnet_fe.net.hub import hub_link_state
+
+
+class DeployModel(NamedTuple):
+    """What the deploy kernel needs and never changes (read-only in the kernel).
+
+    springs (m, 2) int64 node pairs; rest l0 [m], stiffness K = EA/l0 [N/m], damping c [N s/m],
+    offset [m] (LINK167), diameter d [m], all (m,) — the rope law Eq. (1)–(4) and its aerodynamic
+    size Eq. (5)–(6); hub_link (m,) bool; anchor (m,) [rad] rim angle of each hub link; mass (n,)
+    [kg]; hub node index (-1: none); r0 hub radius [m]; half_length H/2 [m]; hub_inertia J
+    [kg m²] (1 without a hub); gravity (3,) [m/s²]; rho air density [kg/m³]; wind (3,) [m/s];
+    air: aerodynamic loads on/off. Built by ``net.state.kernel_model``.
+    """
+
+    springs: np.ndarray
+    rest: np.ndarray
+    stiffness: np.ndarray
+    damping: np.ndarray
+    offset: np.ndarray
+    diameter: np.ndarray
+    hub_link: np.ndarray
+    anchor: np.ndarray
+    mass: np.ndarray
+    hub: int
+    r0: float
+    half_length: float
+    hub_inertia: float
+    gravity: np.ndarray
+    rho: float
+    wind: np.ndarray
+    air: bool
+
+
+class DeployState(NamedTuple):
+    """What the deploy kernel changes in place: x, v (n, 3) [m], [m/s]; hub (2,) = (θ [rad],
+    ω [rad/s]); wrap (m,) wound angle of each hub link [rad]; tension (m,) [N] of the last force
+    evaluation."""
+
+    x: np.ndarray
+    v: np.ndarray
+    hub: np.ndarray
+    wrap: np.ndarray
+    tension: np.ndarray
 
 
 @njit(cache=True)
-def net_forces(x, v, hub_state, wrap, springs, rest, stiffness, damping, offset, diameter,
-               hub_link, anchor, mass, hub, r0, half_length, gvec, rho, wind, air, f, tension, lam):
+def net_forces(model, state, f, lam):
     """All forces on the net at one instant, Eq. (11): gravity + rope tensions (Eq. 1–4, hub
-    links Eq. 12–19) + rope aerodynamics (Eq. 5–10). Writes f (n, 3) [N], tension (m,) [N],
-    updates wrap (m,) [rad] in place. Returns (torque about +z on the hub [N m], max tension [N]).
+    links Eq. 12–19) + rope aerodynamics (Eq. 5–10). ``model`` a DeployModel, ``state`` a
+    DeployState (its tension (m,) [N] is written and its wrap (m,) [rad] updated in place).
+    Writes f (n, 3) [N]. Returns (torque about +z on the hub [N m], max tension [N]).
 
-    hub_state = (θ [rad], ω [rad/s]); gvec (3,) [m/s^2]; rho [kg/m^3]; wind (3,) [m/s];
-    air : include aerodynamic loads; lam (n,) [kg/s]: accumulates, per node, a Gershgorin
-    bound of the drag's velocity derivative Σ_s ½ ρ C_max d l |v_s| (the caller divides by m).
+    lam (n,) [kg/s]: accumulates, per node, a Gershgorin bound of the drag's velocity
+    derivative Σ_s ½ ρ C_max d l |v_s| (the caller divides by m).
     """
+    x = state.x
+    v = state.v
+    wrap = state.wrap
+    tension = state.tension
+    springs = model.springs
+    hub_link = model.hub_link
+    mass = model.mass
+    hub = model.hub
+    r0 = model.r0
+    gvec = model.gravity
+    wind = model.wind
+    rho = model.rho
+    diameter = model.diameter
     n = x.shape[0]
     for i in range(n):
         f[i, 0] = mass[i] * gvec[0]
         f[i, 1] = mass[i] * gvec[1]
         f[i, 2] = mass[i] * gvec[2]
-    theta = hub_state[0]
-    omega = hub_state[1]
+    theta = state.hub[0]
+    omega = state.hub[1]
     torque = 0.0
     tmax = 0.0
     pt = np.empty(3)
@@ -46,7 +101,8 @@ def net_forces(x, v, hub_state, wrap, springs, rest, stiffness, damping, offset,
         j = springs[s, 1]
         if hub_link[s]:
             i = hub
-            gamma, w = hub_link_state(x, v, hub, j, theta, omega, anchor[s], r0, half_length, wrap[s], pt, vt)
+            gamma, w = hub_link_state(x, v, hub, j, theta, omega, model.anchor[s], r0, model.half_length,
+                                      wrap[s], pt, vt)
             wrap[s] = w
             d0 = x[j, 0] - pt[0]; d1 = x[j, 1] - pt[1]; d2 = x[j, 2] - pt[2]
             extra = r0 * abs(w)
@@ -57,7 +113,8 @@ def net_forces(x, v, hub_state, wrap, springs, rest, stiffness, damping, offset,
             extra = 0.0
             vi0 = v[i, 0]; vi1 = v[i, 1]; vi2 = v[i, 2]
         t, u0, u1, u2, lf, ldot, stretch = spring_force(d0, d1, d2, v[j, 0] - vi0, v[j, 1] - vi1, v[j, 2] - vi2,
-                                                        extra, rest[s], stiffness[s], damping[s], offset[s])
+                                                        extra, model.rest[s], model.stiffness[s],
+                                                        model.damping[s], model.offset[s])
         if lf == 0.0:
             tension[s] = 0.0
             continue
@@ -69,7 +126,7 @@ def net_forces(x, v, hub_state, wrap, springs, rest, stiffness, damping, offset,
         if hub_link[s]:
             # lever arm of the rim point: (T - c) x (t u), z component (Eq. 12-13)
             torque += t * ((pt[0] - x[hub, 0]) * u1 - (pt[1] - x[hub, 1]) * u0)
-        if air:
+        if model.air:
             vrx = 0.5 * (vi0 + v[j, 0]) - wind[0]
             vry = 0.5 * (vi1 + v[j, 1]) - wind[1]
             vrz = 0.5 * (vi2 + v[j, 2]) - wind[2]
@@ -84,25 +141,24 @@ def net_forces(x, v, hub_state, wrap, springs, rest, stiffness, damping, offset,
 
 
 @njit(cache=True)
-def advance(x, v, hub_state, wrap, n_steps, dt, springs, rest, stiffness, damping, offset,
-            diameter, hub_link, anchor, mass, hub, r0, half_length, hub_inertia, gvec, rho, wind, air,
-            f, tension, lam):
-    """Advance the net ``n_steps`` steps of ``dt`` [s] in place (symplectic Euler).
+def advance(model, state, n_steps, dt):
+    """Advance ``state`` (DeployState) of ``model`` (DeployModel) ``n_steps`` steps of ``dt``
+    [s] in place (symplectic Euler); ``state.tension`` holds the tensions of the last force
+    evaluation (one step old).
 
-    x, v (n, 3) [m], [m/s]; hub_state (2,) = (θ, ω); wrap (m,) [rad]; f (n, 3) work array;
-    tension (m,) [N] holds the tensions of the last force evaluation; lam (n,) work array.
     Returns (largest segment tension seen during the call [N], largest drag stability number
     λ dt, λ = drag velocity-derivative bound / m; the lagged-velocity update needs λ dt <= 2).
     """
+    x = state.x
+    v = state.v
+    mass = model.mass
     n = x.shape[0]
+    f = np.empty((n, 3))
+    lam = np.zeros(n)
     peak = 0.0
     drag_number = 0.0
-    for i in range(n):
-        lam[i] = 0.0
     for step in range(n_steps):
-        torque, tmax = net_forces(x, v, hub_state, wrap, springs, rest, stiffness, damping, offset,
-                            diameter, hub_link, anchor, mass, hub, r0, half_length, gvec, rho, wind, air,
-                            f, tension, lam)
+        torque, tmax = net_forces(model, state, f, lam)
         if tmax > peak:
             peak = tmax
         for i in range(n):
@@ -117,7 +173,7 @@ def advance(x, v, hub_state, wrap, n_steps, dt, springs, rest, stiffness, dampin
             x[i, 0] += dt * v[i, 0]
             x[i, 1] += dt * v[i, 1]
             x[i, 2] += dt * v[i, 2]
-        if hub >= 0:
-            hub_state[1] += dt * torque / hub_inertia
-            hub_state[0] += dt * hub_state[1]
+        if model.hub >= 0:
+            state.hub[1] += dt * torque / model.hub_inertia
+            state.hub[0] += dt * state.hub[1]
     return peak, drag_number

@@ -10,7 +10,7 @@ from numba import njit
 
 from flexnet_fe.errors import NumericalError
 from flexnet_fe.net.hub import wrap_geometry
-from flexnet_fe.net.kernels import advance, net_forces
+from flexnet_fe.net.kernels import DeployModel, DeployState, advance, net_forces
 from flexnet_fe.net.topology import NetModel
 
 
@@ -44,6 +44,22 @@ def initial_state(model: NetModel, flight_velocity=(0.0, 0.0, 0.0)) -> NetState:
                     np.array([0.0, model.hub_spin0]), np.zeros(model.n_springs), np.zeros(model.n_springs))
 
 
+def kernel_model(model: NetModel, env: Environment) -> DeployModel:
+    """The deploy kernel's read-only data: ``model`` under the loads ``env``."""
+    return DeployModel(model.springs, model.rest_length, model.stiffness, model.damping, model.slack_offset,
+                       model.diameter, model.hub_link, model.anchor_angle, model.mass, int(model.hub_node),
+                       float(model.hub_radius), 0.5 * float(model.hub_length),
+                       float(model.hub_inertia) if model.hub_node >= 0 else 1.0,
+                       np.asarray(env.gravity, dtype=float), float(env.rho),
+                       np.asarray(env.wind, dtype=float), bool(env.air))
+
+
+def kernel_state(state: NetState, wrap: np.ndarray | None = None) -> DeployState:
+    """The deploy kernel's view of ``state`` (same arrays: the kernel changes them in place);
+    ``wrap`` replaces ``state.wrap`` when given."""
+    return DeployState(state.x, state.v, state.hub, state.wrap if wrap is None else wrap, state.tension)
+
+
 def step_many(model: NetModel, state: NetState, env: Environment, dt: float, n_steps: int,
               dt_limit: float = math.nan) -> tuple[float, float]:
     """Advance ``state`` in place by ``n_steps`` × ``dt`` [s] in one compiled call.
@@ -51,15 +67,7 @@ def step_many(model: NetModel, state: NetState, env: Environment, dt: float, n_s
     Returns (largest rope tension [N] seen, largest drag stability number λ dt seen; must stay
     <= 2). Raises NumericalError if the state is no longer finite, naming dt and ``dt_limit``
     (the stability limit it was chosen against) and the drag number."""
-    f = np.empty_like(state.x)
-    lam = np.empty(len(state.x))
-    peak, drag_number = advance(state.x, state.v, state.hub, state.wrap, int(n_steps), float(dt), model.springs,
-                   model.rest_length, model.stiffness, model.damping, model.slack_offset,
-                   model.diameter, model.hub_link, model.anchor_angle, model.mass, model.hub_node,
-                   model.hub_radius, 0.5 * model.hub_length,
-                   model.hub_inertia if model.hub_node >= 0 else 1.0,
-                   np.asarray(env.gravity, dtype=float), float(env.rho),
-                   np.asarray(env.wind, dtype=float), bool(env.air), f, state.tension, lam)
+    peak, drag_number = advance(kernel_model(model, env), kernel_state(state), int(n_steps), float(dt))
     state.t += n_steps * dt
     if not (np.isfinite(state.x).all() and np.isfinite(state.v).all() and np.isfinite(state.hub).all()):
         raise NumericalError(
@@ -70,25 +78,27 @@ def step_many(model: NetModel, state: NetState, env: Environment, dt: float, n_s
 
 def evaluate_tensions(model: NetModel, state: NetState, env: Environment) -> None:
     """Fill ``state.tension`` [N] from the current state without advancing it."""
-    f = np.empty_like(state.x)
-    net_forces(state.x, state.v, state.hub, state.wrap.copy(), model.springs, model.rest_length,
-               model.stiffness, model.damping, model.slack_offset, model.diameter, model.hub_link,
-               model.anchor_angle, model.mass, model.hub_node, model.hub_radius, 0.5 * model.hub_length,
-               np.asarray(env.gravity, dtype=float), float(env.rho), np.asarray(env.wind, dtype=float),
-               bool(env.air), f, state.tension, np.zeros(len(state.x)))
+    net_forces(kernel_model(model, env), kernel_state(state, state.wrap.copy()), np.empty_like(state.x),
+               np.zeros(len(state.x)))
 
 
 @njit(cache=True)
-def _lengths(x, springs, hub_link, anchor, hub, r0, half_length, theta, wrap):
+def _lengths(model, state):
+    """Segment lengths [m] (m,) of a DeployState under a DeployModel (hub links: free part +
+    wound part, the wound angle from ``state.wrap`` updated by the current geometry)."""
+    x = state.x
+    springs, hub, r0 = model.springs, model.hub, model.r0
+    theta = state.hub[0]
     m = springs.shape[0]
     out = np.empty(m)
     for s in range(m):
         j = springs[s, 1]
-        if hub_link[s]:
-            if abs(x[j, 2] - x[hub, 2]) > half_length:
-                gamma, w = theta + anchor[s], 0.0
+        if model.hub_link[s]:
+            if abs(x[j, 2] - x[hub, 2]) > model.half_length:
+                gamma, w = theta + model.anchor[s], 0.0
             else:
-                gamma, w = wrap_geometry(x[j, 0] - x[hub, 0], x[j, 1] - x[hub, 1], theta + anchor[s], r0, wrap[s])
+                gamma, w = wrap_geometry(x[j, 0] - x[hub, 0], x[j, 1] - x[hub, 1], theta + model.anchor[s], r0,
+                                         state.wrap[s])
             d0 = x[j, 0] - x[hub, 0] - r0 * math.cos(gamma)
             d1 = x[j, 1] - x[hub, 1] - r0 * math.sin(gamma)
             d2 = x[j, 2] - x[hub, 2]
@@ -100,10 +110,12 @@ def _lengths(x, springs, hub_link, anchor, hub, r0, half_length, theta, wrap):
     return out
 
 
+_NO_LOADS = Environment(gravity=np.zeros(3), rho=0.0, wind=np.zeros(3), air=False)
+
+
 def segment_lengths(model: NetModel, state: NetState) -> np.ndarray:
     """Current length of each segment [m], shape (m,) (hub links: free part + wound part)."""
-    return _lengths(state.x, model.springs, model.hub_link, model.anchor_angle, model.hub_node,
-                    model.hub_radius, 0.5 * model.hub_length, state.hub[0], state.wrap)
+    return _lengths(kernel_model(model, _NO_LOADS), kernel_state(state))
 
 
 def energies(model: NetModel, state: NetState, gravity=(0.0, 0.0, 0.0)) -> dict[str, float]:

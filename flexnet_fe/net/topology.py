@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from flexnet_fe.net.config import RotaryNet, TractionNet, WarpInitialState
+from flexnet_fe.net.forces import RopeMaterial, rope_material
 
 
 @dataclass(frozen=True)
@@ -46,6 +47,9 @@ class NetModel:
     anchor_angle : [rad], shape (m,); 0 where not a hub link.
     hub_radius : r0 [m]; hub_length : axial length H [m]; hub_inertia : J [kg m^2];
     hub_spin0 : initial ω about +z [rad/s].
+    rope : the rope's material (E, ν, ρ, d, transverse modulus, strength), its one home; the
+         builders derive stiffness_ea, diameter and the lumped rope mass from it (None only for
+         hand-built test models).
     """
 
     kind: str
@@ -69,6 +73,7 @@ class NetModel:
     hub_length: float = 0.0
     hub_inertia: float = 0.0
     hub_spin0: float = 0.0
+    rope: RopeMaterial | None = None
 
     def __post_init__(self):
         m = len(self.springs)
@@ -92,7 +97,13 @@ class NetModel:
     @property
     def stiffness(self) -> np.ndarray:
         """Segment stiffness K = EA / l0 [N/m], shape (m,), Eq. (3)."""
-        return self.stiffness_ea / self.rest_length
+        return segment_stiffness(self.stiffness_ea, self.rest_length)
+
+
+def segment_stiffness(ea: np.ndarray, rest: np.ndarray) -> np.ndarray:
+    """Axial stiffness K = EA / l0 [N/m] of segments of rigidity EA [N] and rest length l0 [m],
+    Eq. (3) — the one place it is computed (``NetModel.stiffness``)."""
+    return ea / rest
 
 
 def segment_damping(stiffness: np.ndarray, m_i: np.ndarray, m_j: np.ndarray, zeta: float) -> np.ndarray:
@@ -113,6 +124,89 @@ def _lump(n: int, springs: np.ndarray, seg_mass: np.ndarray) -> np.ndarray:
     return mass
 
 
+class _Nodes:
+    """Node coordinates being built: the knots first, then the interior nodes of each bar
+    split into ``k`` segments (appended in the order the bars are added)."""
+
+    def __init__(self, knots: np.ndarray, k: int):
+        self.pts = [knots]
+        self.next = len(knots)
+        self.k = k
+
+    def chain(self, p_a, p_b, a: int, b: int) -> list[int]:
+        """Node ids of a bar from point p_a (node a) to point p_b (node b), k segments."""
+        ids = [a]
+        if self.k > 1:
+            s_ = np.arange(1, self.k)[:, None] / self.k
+            self.pts.append(p_a + s_ * (p_b - p_a))
+            ids += list(range(self.next, self.next + self.k - 1))
+            self.next += self.k - 1
+        return ids + [b]
+
+    def coordinates(self) -> np.ndarray:
+        return np.vstack(self.pts)
+
+
+def _rope_segments(cfg: TractionNet | RotaryNet, springs: np.ndarray, rest: np.ndarray, mass: np.ndarray) -> dict:
+    """Rope law arrays of NetModel (stiffness_ea, damping, slack_offset, diameter), each (m,),
+    and its ``rope`` material, from the ``[net]`` rope fields; ``mass`` (n,) [kg] the node masses incl. concentrated ones.
+    ζ is the damping ratio of a whole mesh bar (k = 1); a bar split into k segments keeps the
+    same material viscosity (dashpots in series: c_segment = k c_bar), so refinement converges."""
+    k = cfg.subdivisions
+    rope = rope_material(cfg)
+    ea = np.full(len(springs), rope.youngs_modulus * rope_area(rope.diameter))
+    damping = k * segment_damping(segment_stiffness(ea, rest), mass[springs[:, 0]], mass[springs[:, 1]],
+                                  cfg.damping_ratio)
+    return dict(stiffness_ea=ea, damping=damping, slack_offset=np.full(len(springs), cfg.slack_offset / k),
+                diameter=np.full(len(springs), rope.diameter), rope=rope)
+
+
+def rope_area(diameter: float) -> float:
+    """Rope cross-section A = π d² / 4 [m²] of diameter d [m]."""
+    return 0.25 * np.pi * diameter**2
+
+
+def _fan(ring: list[int]) -> list[tuple[int, int, int]]:
+    """Triangles fanning a polygon of node ids from its first node."""
+    return [(ring[0], ring[q], ring[q + 1]) for q in range(1, len(ring) - 1)]
+
+
+def _traction_bars(nk: int, kid: np.ndarray, nodes: _Nodes, knots: np.ndarray):
+    """Springs (list of pairs) and the node chain of every mesh bar keyed by its knot pair."""
+    springs, bar_nodes = [], {}
+
+    def add_bar(a, b):
+        chain = nodes.chain(knots[a], knots[b], a, b)
+        springs.extend(zip(chain[:-1], chain[1:]))
+        bar_nodes[(a, b)] = chain
+
+    for i in range(nk):
+        for j in range(nk - 1):
+            add_bar(kid[i, j], kid[i, j + 1])
+    for i in range(nk - 1):
+        for j in range(nk):
+            add_bar(kid[i, j], kid[i + 1, j])
+    return springs, bar_nodes
+
+
+def _traction_cells_and_loop(nk: int, kid: np.ndarray, bar_nodes: dict):
+    """Cells (each mesh square the polygon of its subdivided edges, fanned from a corner) and
+    the ordered perimeter nodes."""
+    tris = []
+    for i in range(nk - 1):
+        for j in range(nk - 1):
+            ring = (bar_nodes[(kid[i, j], kid[i, j + 1])][:-1]
+                    + bar_nodes[(kid[i, j + 1], kid[i + 1, j + 1])][:-1]
+                    + bar_nodes[(kid[i + 1, j], kid[i + 1, j + 1])][::-1][:-1]
+                    + bar_nodes[(kid[i, j], kid[i + 1, j])][::-1][:-1])
+            tris.extend(_fan(ring))
+    loop = (sum((bar_nodes[(kid[0, j], kid[0, j + 1])][:-1] for j in range(nk - 1)), [])
+            + sum((bar_nodes[(kid[i, -1], kid[i + 1, -1])][:-1] for i in range(nk - 1)), [])
+            + sum((bar_nodes[(kid[-1, j], kid[-1, j + 1])][::-1][:-1] for j in reversed(range(nk - 1))), [])
+            + sum((bar_nodes[(kid[i, 0], kid[i + 1, 0])][::-1][:-1] for i in reversed(range(nk - 1))), []))
+    return np.asarray(tris, dtype=np.int64), np.asarray(loop, dtype=np.int64)
+
+
 def build_traction(cfg: TractionNet) -> NetModel:
     """Square traction net (paper §V-A): N × N knots, N = edge/mesh + 1, each mesh bar split
     into ``cfg.subdivisions`` segments; four corner masses launched outwards.
@@ -124,78 +218,88 @@ def build_traction(cfg: TractionNet) -> NetModel:
     nk = int(round(cfg.edge_length / cfg.mesh_size)) + 1
     if abs((nk - 1) * cfg.mesh_size - cfg.edge_length) > 1e-9 * cfg.edge_length:
         raise ValueError(f"edge_length {cfg.edge_length} m is not a multiple of mesh_size {cfg.mesh_size} m")
-    k = cfg.subdivisions
-    h = cfg.mesh_size
-    coords = -0.5 * cfg.edge_length + h * np.arange(nk)
+    coords = -0.5 * cfg.edge_length + cfg.mesh_size * np.arange(nk)
     X, Y = np.meshgrid(coords, coords)  # knot (row i = y index, col j = x index)
     knots = np.column_stack([X.ravel(), Y.ravel(), np.zeros(nk * nk)])
     kid = np.arange(nk * nk).reshape(nk, nk)
-
-    pts = [knots]
-    springs = []
-    nxt = nk * nk
-    bar_nodes = {}  # (a, b) knot pair -> list of node ids from a to b
-
-    def add_bar(a, b):
-        nonlocal nxt
-        chain = [a]
-        if k > 1:
-            s = np.arange(1, k)[:, None] / k
-            pts.append(knots[a] + s * (knots[b] - knots[a]))
-            chain += list(range(nxt, nxt + k - 1))
-            nxt += k - 1
-        chain.append(b)
-        springs.extend(zip(chain[:-1], chain[1:]))
-        bar_nodes[(a, b)] = chain
-
-    for i in range(nk):
-        for j in range(nk - 1):
-            add_bar(kid[i, j], kid[i, j + 1])
-    for i in range(nk - 1):
-        for j in range(nk):
-            add_bar(kid[i, j], kid[i + 1, j])
-    x0 = np.vstack(pts)
+    nodes = _Nodes(knots, cfg.subdivisions)
+    springs, bar_nodes = _traction_bars(nk, kid, nodes, knots)
+    x0 = nodes.coordinates()
     springs = np.asarray(springs, dtype=np.int64)
     n = len(x0)
 
     rest = np.linalg.norm(x0[springs[:, 1]] - x0[springs[:, 0]], axis=1)
-    area = 0.25 * np.pi * cfg.rope_diameter**2
-    seg_mass = cfg.density * area * rest
-    mass = _lump(n, springs, seg_mass)
+    mass = _lump(n, springs, cfg.density * rope_area(cfg.rope_diameter) * rest)
     corners = np.array([kid[0, 0], kid[0, -1], kid[-1, -1], kid[-1, 0]], dtype=np.int64)
     mass[corners] += cfg.corner_mass
-    ea = np.full(len(springs), cfg.youngs_modulus * area)
-    # ζ is the damping ratio of a whole mesh bar (k = 1); a bar split into k segments keeps the
-    # same material viscosity (dashpots in series: c_segment = k c_bar), so refinement converges
-    damping = k * segment_damping(ea / rest, mass[springs[:, 0]], mass[springs[:, 1]], cfg.damping_ratio)
 
     v0 = np.zeros((n, 3))
     a, e = np.radians(cfg.launch_azimuth_deg), np.radians(cfg.launch_elevation_deg)
     for c in corners:
         sx, sy = np.sign(x0[c, 0]), np.sign(x0[c, 1])
         v0[c] = cfg.corner_speed * np.array([np.cos(e) * sx * np.cos(a), np.cos(e) * sy * np.sin(a), np.sin(e)])
-
-    # cells: each mesh square is the polygon of its (subdivided) edges, fanned from a corner
-    tris = []
-    for i in range(nk - 1):
-        for j in range(nk - 1):
-            ring = (bar_nodes[(kid[i, j], kid[i, j + 1])][:-1]
-                    + bar_nodes[(kid[i, j + 1], kid[i + 1, j + 1])][:-1]
-                    + bar_nodes[(kid[i + 1, j], kid[i + 1, j + 1])][::-1][:-1]
-                    + bar_nodes[(kid[i, j], kid[i + 1, j])][::-1][:-1])
-            tris.extend((ring[0], ring[q], ring[q + 1]) for q in range(1, len(ring) - 1))
-    loop = (sum((bar_nodes[(kid[0, j], kid[0, j + 1])][:-1] for j in range(nk - 1)), [])
-            + sum((bar_nodes[(kid[i, -1], kid[i + 1, -1])][:-1] for i in range(nk - 1)), [])
-            + sum((bar_nodes[(kid[-1, j], kid[-1, j + 1])][::-1][:-1] for j in reversed(range(nk - 1))), [])
-            + sum((bar_nodes[(kid[i, 0], kid[i + 1, 0])][::-1][:-1] for i in reversed(range(nk - 1))), []))
+    cells, loop = _traction_cells_and_loop(nk, kid, bar_nodes)
     drag_free = np.zeros(n, dtype=np.bool_)
     drag_free[corners] = True
-    return NetModel(
-        kind="traction", x0=x0, v0=v0, mass=mass, springs=springs, rest_length=rest,
-        stiffness_ea=ea, damping=damping, slack_offset=np.full(len(springs), cfg.slack_offset / k),
-        diameter=np.full(len(springs), cfg.rope_diameter), drag_free=drag_free,
-        mass_nodes=corners, cells=np.asarray(tris, dtype=np.int64),
-        boundary_loop=np.asarray(loop, dtype=np.int64))
+    return NetModel(kind="traction", x0=x0, v0=v0, mass=mass, springs=springs, rest_length=rest,
+                    drag_free=drag_free, mass_nodes=corners, cells=cells, boundary_loop=loop,
+                    **_rope_segments(cfg, springs, rest, mass))
+
+
+def _rotary_bars(cfg: RotaryNet, nodes: _Nodes, knots: np.ndarray, nid: np.ndarray, ang: np.ndarray):
+    """Springs, hub-link flags, anchor angles (lists, one per segment) and the node chains of
+    the warp bars (key (w, i); (w, -1) the rim bar) and weft bars (key (w, i))."""
+    nw, M, r0 = cfg.warps, nid.shape[1], cfg.hub_radius
+    springs, hub_link, anchor = [], [], []
+    warp_bars, weft_bars = {}, {}
+
+    def add(ids, first_is_link=False, a_w=0.0):
+        for q, (i, j) in enumerate(zip(ids[:-1], ids[1:])):
+            link = first_is_link and q == 0
+            springs.append((i, j)); hub_link.append(link); anchor.append(a_w if link else 0.0)
+
+    for w in range(nw):
+        rim = r0 * np.array([np.cos(ang[w]), np.sin(ang[w]), 0.0])
+        warp_bars[(w, -1)] = ids = nodes.chain(rim, knots[nid[w, 0]], 0, nid[w, 0])
+        add(ids, True, ang[w])
+        for i in range(M - 1):
+            warp_bars[(w, i)] = ids = nodes.chain(knots[nid[w, i]], knots[nid[w, i + 1]], nid[w, i], nid[w, i + 1])
+            add(ids)
+    for w in range(nw):
+        u = (w + 1) % nw
+        for i in range(M):
+            weft_bars[(w, i)] = ids = nodes.chain(knots[nid[w, i]], knots[nid[u, i]], nid[w, i], nid[u, i])
+            add(ids)
+    return (np.asarray(springs, dtype=np.int64), np.asarray(hub_link, dtype=np.bool_), np.asarray(anchor),
+            warp_bars, weft_bars)
+
+
+def _rotary_cells_and_loop(nw: int, M: int, warp_bars: dict, weft_bars: dict):
+    """Cells (the hub sector and each mesh quadrilateral, fanned) and the perimeter nodes."""
+    tris = []
+    for w in range(nw):
+        u = (w + 1) % nw
+        tris.extend(_fan(warp_bars[(w, -1)][:-1] + weft_bars[(w, 0)][:-1] + warp_bars[(u, -1)][::-1][:-1]))
+        for i in range(M - 1):
+            tris.extend(_fan(warp_bars[(w, i)][:-1] + weft_bars[(w, i + 1)][:-1]
+                             + warp_bars[(u, i)][::-1][:-1] + weft_bars[(w, i)][::-1][:-1]))
+    loop = sum((weft_bars[(w, M - 1)][:-1] for w in range(nw)), [])
+    return np.asarray(tris, dtype=np.int64), np.asarray(loop, dtype=np.int64)
+
+
+def _rotary_velocities(cfg: RotaryNet, x0: np.ndarray, tips: np.ndarray, ang: np.ndarray) -> np.ndarray:
+    """Initial velocities (n, 3) [m/s]: warps at rest or in rigid rotation, hub at rest, tips
+    launched tangentially at ``tip_speed``."""
+    v0 = np.zeros((len(x0), 3))
+    if cfg.warp_initial_state is WarpInitialState.RIGID_ROTATION:
+        v0[:, 0] = -cfg.hub_spin * x0[:, 1]
+        v0[:, 1] = cfg.hub_spin * x0[:, 0]
+    elif cfg.warp_initial_state is not WarpInitialState.REST:
+        raise ValueError(f"unknown warp_initial_state {cfg.warp_initial_state!r}")
+    v0[0] = 0.0
+    v0[tips, 0] = -cfg.tip_speed * np.sin(ang)
+    v0[tips, 1] = cfg.tip_speed * np.cos(ang)
+    return v0
 
 
 def build_rotary(cfg: RotaryNet) -> NetModel:
@@ -214,93 +318,37 @@ def build_rotary(cfg: RotaryNet) -> NetModel:
     ang = 2 * np.pi * np.arange(nw) / nw
     r = r0 + h * np.arange(1, M + 1)
     nid = 1 + np.arange(nw)[:, None] * M + np.arange(M)[None, :]  # knot (warp, ring)
-    nk = 1 + nw * M
-    knots = np.zeros((nk, 3))
+    knots = np.zeros((1 + nw * M, 3))
     knots[nid, 0] = r[None, :] * np.cos(ang)[:, None]
     knots[nid, 1] = r[None, :] * np.sin(ang)[:, None]
-
-    pts = [knots]
-    springs, hub_link, anchor = [], [], []
-    nxt = nk
-
-    def chain(p_a, p_b, a, b):
-        """Nodes of a bar from point p_a (node a, or None for the rim) to node b."""
-        nonlocal nxt
-        ids = [a]
-        if k > 1:
-            s_ = np.arange(1, k)[:, None] / k
-            pts.append(p_a + s_ * (p_b - p_a))
-            ids += list(range(nxt, nxt + k - 1))
-            nxt += k - 1
-        return ids + [b]
-
-    warp_bars, weft_bars = {}, {}
-    for w in range(nw):
-        rim = r0 * np.array([np.cos(ang[w]), np.sin(ang[w]), 0.0])
-        ids = chain(rim, knots[nid[w, 0]], 0, nid[w, 0])
-        warp_bars[(w, -1)] = ids
-        for q, (i, j) in enumerate(zip(ids[:-1], ids[1:])):
-            springs.append((i, j)); hub_link.append(q == 0); anchor.append(ang[w] if q == 0 else 0.0)
-        for i in range(M - 1):
-            ids = chain(knots[nid[w, i]], knots[nid[w, i + 1]], nid[w, i], nid[w, i + 1])
-            warp_bars[(w, i)] = ids
-            for a_, b_ in zip(ids[:-1], ids[1:]):
-                springs.append((a_, b_)); hub_link.append(False); anchor.append(0.0)
-    for w in range(nw):
-        u = (w + 1) % nw
-        for i in range(M):
-            ids = chain(knots[nid[w, i]], knots[nid[u, i]], nid[w, i], nid[u, i])
-            weft_bars[(w, i)] = ids
-            for a_, b_ in zip(ids[:-1], ids[1:]):
-                springs.append((a_, b_)); hub_link.append(False); anchor.append(0.0)
-    x0 = np.vstack(pts)
+    nodes = _Nodes(knots, k)
+    springs, hub_link, anchor, warp_bars, weft_bars = _rotary_bars(cfg, nodes, knots, nid, ang)
+    x0 = nodes.coordinates()
     n = len(x0)
-    springs = np.asarray(springs, dtype=np.int64)
-    hub_link = np.asarray(hub_link, dtype=np.bool_)
-    anchor = np.asarray(anchor)
 
     # rest length: hub links run from the rim to their first node; others node to node
     rest = np.linalg.norm(x0[springs[:, 1]] - x0[springs[:, 0]], axis=1)
     rest[hub_link] = h / k
-    area = 0.25 * np.pi * cfg.rope_diameter**2
-    seg_mass = cfg.density * area * rest
-    mass = _lump(n, springs, seg_mass)
+    mass = _lump(n, springs, cfg.density * rope_area(cfg.rope_diameter) * rest)
     mass[0] += cfg.hub_mass
     tips = nid[:, -1].astype(np.int64)
     mass[tips] += cfg.tip_mass
-    ea = np.full(len(springs), cfg.youngs_modulus * area)
-    # ζ per whole bar; subdivided bars keep the material viscosity (see build_traction)
-    damping = k * segment_damping(ea / rest, mass[springs[:, 0]], mass[springs[:, 1]], cfg.damping_ratio)
-
-    v0 = np.zeros((n, 3))
-    if cfg.warp_initial_state is WarpInitialState.RIGID_ROTATION:
-        v0[:, 0] = -cfg.hub_spin * x0[:, 1]
-        v0[:, 1] = cfg.hub_spin * x0[:, 0]
-    elif cfg.warp_initial_state is not WarpInitialState.REST:
-        raise ValueError(f"unknown warp_initial_state {cfg.warp_initial_state!r}")
-    v0[0] = 0.0
-    v0[tips, 0] = -cfg.tip_speed * np.sin(ang)
-    v0[tips, 1] = cfg.tip_speed * np.cos(ang)
-
-    tris = []
-    for w in range(nw):
-        u = (w + 1) % nw
-        ring = warp_bars[(w, -1)][:-1] + weft_bars[(w, 0)][:-1] + warp_bars[(u, -1)][::-1][:-1]
-        tris.extend((ring[0], ring[q], ring[q + 1]) for q in range(1, len(ring) - 1))
-        for i in range(M - 1):
-            ring = (warp_bars[(w, i)][:-1] + weft_bars[(w, i + 1)][:-1]
-                    + warp_bars[(u, i)][::-1][:-1] + weft_bars[(w, i)][::-1][:-1])
-            tris.extend((ring[0], ring[q], ring[q + 1]) for q in range(1, len(ring) - 1))
-    loop = sum((weft_bars[(w, M - 1)][:-1] for w in range(nw)), [])
+    cells, loop = _rotary_cells_and_loop(nw, M, warp_bars, weft_bars)
     drag_free = np.zeros(n, dtype=np.bool_)
     drag_free[tips] = True
     drag_free[0] = True
     J = cfg.hub_inertia if cfg.hub_inertia is not None else 0.5 * cfg.hub_mass * r0**2
     return NetModel(
-        kind="rotary", x0=x0, v0=v0, mass=mass, springs=springs, rest_length=rest,
-        stiffness_ea=ea, damping=damping, slack_offset=np.full(len(springs), cfg.slack_offset / k),
-        diameter=np.full(len(springs), cfg.rope_diameter), drag_free=drag_free,
-        mass_nodes=tips, cells=np.asarray(tris, dtype=np.int64),
-        boundary_loop=np.asarray(loop, dtype=np.int64), hub_node=0, hub_link=hub_link,
-        anchor_angle=anchor, hub_radius=r0, hub_length=cfg.hub_length, hub_inertia=J,
-        hub_spin0=cfg.hub_spin)
+        kind="rotary", x0=x0, v0=_rotary_velocities(cfg, x0, tips, ang), mass=mass, springs=springs,
+        rest_length=rest, drag_free=drag_free, mass_nodes=tips, cells=cells, boundary_loop=loop, hub_node=0,
+        hub_link=hub_link, anchor_angle=anchor, hub_radius=r0, hub_length=cfg.hub_length, hub_inertia=J,
+        hub_spin0=cfg.hub_spin, **_rope_segments(cfg, springs, rest, mass))
+
+
+def build_net(net: TractionNet | RotaryNet) -> NetModel:
+    """The NetModel of a ``[net]`` section."""
+    if isinstance(net, TractionNet):
+        return build_traction(net)
+    if isinstance(net, RotaryNet):
+        return build_rotary(net)
+    raise TypeError(f"unknown net section {type(net).__name__}")

@@ -28,10 +28,12 @@ from pathlib import Path
 from typing import Any
 
 from flexnet_fe.io import atomic_write_text
+from flexnet_fe.report.figures import Figure
 from flexnet_fe.report.rundir import RunData, StageInfo, fin_results, flatten, read_run, stage_pngs
 from flexnet_fe.report.units import (PA_TO_MPA, S_TO_MS, format_value, unit_label, unit_of,
                                      unknown_units)
 from flexnet_fe.report.verdict import Verdict, build_verdict
+from flexnet_fe.runs import REPORT
 
 LOG = logging.getLogger("flexnet.report")
 
@@ -49,14 +51,6 @@ class Row:
     key: str
     value: str
     unit: str
-
-
-@dataclass(frozen=True)
-class Figure:
-    """An image of the report: path relative to the run directory, caption."""
-
-    src: str
-    caption: str
 
 
 def headline_rows(section: dict, skip: set[str] = frozenset()) -> list[Row]:
@@ -153,7 +147,7 @@ def build_report(run_dir: Path, *, pictures: bool = True) -> Path:
         run_dir=str(run.run_dir),
         verdict=verdict, warnings=warnings, top=top, energy=energy,
         stages=stages, notes=notes, fmt=format_value, mpa=PA_TO_MPA, ms=S_TO_MS)
-    path = run.run_dir / "report.html"
+    path = run.run_dir / REPORT
     atomic_write_text(path, html)
     LOG.info("report → %s", path)
     return path

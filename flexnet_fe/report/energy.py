@@ -34,6 +34,7 @@ import numpy as np
 
 from flexnet_fe.io import read_history_csv, write_history_csv
 from flexnet_fe.report.units import TIME_AXIS, axis_unit
+from flexnet_fe.runs import HISTORY
 
 CLASSES = ("kinetic", "internal", "contact", "dissipated", "external_work", "balance", "other")
 STORED = ("kinetic", "internal", "contact", "dissipated")
@@ -155,8 +156,8 @@ def energy_histories(run_dir: Path, stages: list[str]) -> list[tuple[str, Path]]
     out = []
     for stage in stages:
         d = Path(run_dir) / stage
-        if (d / "history.csv").is_file():
-            out.append((stage, d / "history.csv"))
+        if (d / HISTORY).is_file():
+            out.append((stage, d / HISTORY))
         if d.is_dir():
             out += [(f"{stage}/{p.parent.name}", p) for p in sorted(d.glob("*/history.csv"))]
     return out

@@ -10,6 +10,7 @@ the top of the report shows (``missile``, ``net``, ``animation``, ``paraview``).
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -20,6 +21,15 @@ from flexnet_fe.io import read_history_csv
 from flexnet_fe.report.rundir import RunData, fin_results
 from flexnet_fe.report.units import PA_TO_MPA, S_TO_MS, TIME_AXIS, axis_unit
 from flexnet_fe.report.verdict import Verdict
+from flexnet_fe.runs import ENVELOPE_XDMF, FIELDS_XDMF, HISTORY, NET_PVD
+
+
+@dataclass(frozen=True)
+class Figure:
+    """An image of the report: path relative to the run directory, caption."""
+
+    src: str
+    caption: str
 
 
 def _rel(run: RunData, path: Path) -> str:
@@ -49,7 +59,7 @@ def shell_history_plot(run: RunData, fins: list[str], verdict: Verdict, out_dir:
     the allowable(s) as horizontal lines, each fin's summary peak marked. Relative png path."""
     curves = {}
     for fin in fins:
-        h = _read(run, run.run_dir / "shell" / fin / "history.csv", notes)
+        h = _read(run, run.run_dir / "shell" / fin / HISTORY, notes)
         if h is None:
             continue
         if "t_s" in h and "max_von_mises_pa" in h:
@@ -93,7 +103,7 @@ ATTITUDE_COLUMNS = ("pitch_change_rad", "yaw_change_rad", "roll_change_rad", "at
 def collide_plot(run: RunData, out_dir: Path, notes: list[str]) -> str | None:
     """CG acceleration magnitude (the summary's peak marked, and whether it is CFC-filtered)
     and attitude change, each axis in a unit that fits its size (mrad / µrad, not 'rad × 1e-5')."""
-    h = _read(run, run.run_dir / "collide" / "history.csv", notes)
+    h = _read(run, run.run_dir / "collide" / HISTORY, notes)
     if h is None or "t_s" not in h:
         return None
     plt = _plt()
@@ -137,7 +147,7 @@ def contact_events(run: RunData) -> list[list]:
     """[[label, t [s]], ...] for first contact, mid-passage and exit, from the ``contacts`` (or
     ``contact_force_mean_n``) column of collide/history.csv; [] when neither exists."""
     try:
-        h = read_history_csv(run.run_dir / "collide" / "history.csv")
+        h = read_history_csv(run.run_dir / "collide" / HISTORY)
     except (OSError, ValueError):
         return []
     col = "contacts" if "contacts" in h else "contact_force_mean_n" if "contact_force_mean_n" in h else None
@@ -155,7 +165,7 @@ def _fin_names(run: RunData, stage) -> list[str]:
     if stage.folder:
         fins += sorted(p.name for p in stage.folder.iterdir()
                        if p.is_dir() and p.name not in fins
-                       and ((p / "fields.xdmf").exists() or (p / "envelope.xdmf").exists()))
+                       and ((p / FIELDS_XDMF).exists() or (p / ENVELOPE_XDMF).exists()))
     return fins
 
 
@@ -163,7 +173,7 @@ def _fin_picture_job(run: RunData, fin: str, res: dict, out_dir: Path,
                      allowable_pa: float | None = None) -> tuple[dict | None, str]:
     fin_dir = run.run_dir / "shell" / fin
     title = f"fin {fin}" + (f" (allowable {allowable_pa * PA_TO_MPA:.4g} MPa)" if allowable_pa else "")
-    envelope, fields = fin_dir / "envelope.xdmf", fin_dir / "fields.xdmf"
+    envelope, fields = fin_dir / ENVELOPE_XDMF, fin_dir / FIELDS_XDMF
     png = str(out_dir / f"shell_{fin}_von_mises.png")
     loc, vm, t = res.get("peak_location_m"), res.get("peak_von_mises_pa"), res.get("peak_time_s")
     mark = ([*map(float, loc), f"peak {vm * PA_TO_MPA:.4g} MPa at {t * S_TO_MS:.4g} ms"]
@@ -221,9 +231,9 @@ def assemble_figures(run: RunData, verdict: Verdict, stages: list[dict], out_dir
     if collide and collide["info"].folder is not None:
         _collide_jobs(run, collide, out_dir, notes, jobs, later, top)
     deploy = views.get("deploy")
-    if deploy and deploy["info"].folder is not None and (run.run_dir / "deploy" / "net.pvd").is_file():
+    if deploy and deploy["info"].folder is not None and (run.run_dir / "deploy" / NET_PVD).is_file():
         png = out_dir / "deploy_net.png"
-        jobs.append({"kind": "net_panels", "args": {"pvd": str(run.run_dir / "deploy" / "net.pvd"),
+        jobs.append({"kind": "net_panels", "args": {"pvd": str(run.run_dir / "deploy" / NET_PVD),
                                                     "png": str(png), "count": 6, "title": "deploy:"}})
         later.append(lambda r, v=deploy, png=png: _simple(run, r, v["figures"], png, notes, "deploy net",
                                                           "The net during deployment, seen along the flight direction "
@@ -239,8 +249,6 @@ def assemble_figures(run: RunData, verdict: Verdict, stages: list[dict], out_dir
 
 
 def _simple(run: RunData, result, target: list, png: Path, notes: list[str], what: str, caption: str):
-    from flexnet_fe.report.build import Figure
-
     if isinstance(result, str):
         notes.append(f"{what} picture: {result}")
         return None
@@ -250,8 +258,6 @@ def _simple(run: RunData, result, target: list, png: Path, notes: list[str], wha
 
 
 def _shell_jobs(run, view, verdict, out_dir, notes, jobs, later, top) -> None:
-    from flexnet_fe.report.build import Figure
-
     stage = view["info"]
     fins = _fin_names(run, stage)
     summary_fins = fin_results(stage.section) if stage.complete else {}
@@ -309,13 +315,11 @@ def _shell_jobs(run, view, verdict, out_dir, notes, jobs, later, top) -> None:
 
 
 def _collide_jobs(run, view, out_dir, notes, jobs, later, top) -> None:
-    from flexnet_fe.report.build import Figure
-
     plot = collide_plot(run, out_dir, notes)
     if plot:
         view["figures"].append(Figure(plot, "Missile CG acceleration magnitude and attitude change vs time, from "
                                             "collide/history.csv (axis units chosen to fit the values)."))
-    net_pvd, mis_pvd = run.run_dir / "collide" / "net.pvd", run.run_dir / "collide" / "missile.pvd"
+    net_pvd, mis_pvd = run.run_dir / "collide" / NET_PVD, run.run_dir / "collide" / "missile.pvd"
     if not (net_pvd.is_file() and mis_pvd.is_file()):
         return
     events = contact_events(run)

@@ -36,7 +36,8 @@ from pathlib import Path
 import numpy as np
 
 from flexnet_fe.errors import FlexnetError
-from flexnet_fe.report.xdmf import list_fields, nearest_time_index, read_field, read_mesh
+from flexnet_fe.xdmf import list_fields, nearest_time_index, read_field, read_mesh
+from flexnet_fe.runs import ENVELOPE_XDMF, FIELDS_XDMF
 
 MERGE_FRACTION = 0.5
 """Output times of different fins closer than this fraction of the smallest median output
@@ -215,7 +216,7 @@ def write_missile_files(shell_dir: Path, fins: list[str], out_dir: Path, notes: 
     read: list[_Fin] = []
     for name in fins:
         try:
-            read.append(_read_fin(shell_dir / name / "fields.xdmf", name))
+            read.append(_read_fin(shell_dir / name / FIELDS_XDMF, name))
         except FlexnetError as err:
             notes.append(f"ParaView missile file: fin {name} left out ({err})")
     if not read:
@@ -264,7 +265,7 @@ def _write_envelope(shell_dir: Path, fins: list[_Fin], body: Part | None, out_di
     """``missile_envelope.xdmf``; returns (path or None, largest peak von Mises [Pa])."""
     blocks_data = []
     for fin in fins:
-        path = shell_dir / fin.part.name / "envelope.xdmf"
+        path = shell_dir / fin.part.name / ENVELOPE_XDMF
         try:
             mesh, fields = read_mesh(path), list_fields(path)
             values = {n: read_field(path, fields[n], 0) for n in ENVELOPE_FIELDS}

@@ -4,7 +4,7 @@
 (CG1 ``*_nodal_pa``) values where the file has them, else the DG0 cell values — (written by
 dolfinx: a ``mesh`` grid plus one temporal collection per scalar field, cell-centred) seen
 normal to the fin plane; ``render_net`` draws net snapshots from a ``.pvd`` collection of line
-meshes (deploy / collide stages). XDMF files are read with :mod:`flexnet_fe.report.xdmf`
+meshes (deploy / collide stages). XDMF files are read with :mod:`flexnet_fe.xdmf`
 (h5py), not with VTK's XDMF reader (it segfaults on a missing .h5). Rendering uses EGL: ``VTK_DEFAULT_OPENGL_WINDOW`` and
 ``PYVISTA_OFF_SCREEN`` are set (if the caller has not set them) before pyvista is imported.
 
@@ -30,6 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from flexnet_fe.errors import FlexnetError
+from flexnet_fe.net.snapshots import pvd_entries
 from flexnet_fe.report.units import PA_TO_MPA
 
 ENVELOPE_FIELD = "peak_von_mises_pa"
@@ -71,7 +72,7 @@ def plane_normal(points: np.ndarray) -> np.ndarray:
 
 def read_cell_fields(xdmf: Path, time_s: float | None = None):
     """Read a dolfinx XDMF file's cell fields at the output time nearest ``time_s`` (default:
-    the last) with :mod:`flexnet_fe.report.xdmf`.
+    the last) with :mod:`flexnet_fe.xdmf`.
 
     Returns ``(pyvista grid, {name: cell values (n_cells,)}, time shown [s])``. Only scalar
     cell fields at that same time are returned. Raises :class:`FlexnetError` when the file (or
@@ -80,7 +81,7 @@ def read_cell_fields(xdmf: Path, time_s: float | None = None):
     offscreen_env()
     import pyvista as pv
 
-    from flexnet_fe.report.xdmf import list_fields, nearest_time_index, read_field, read_mesh
+    from flexnet_fe.xdmf import list_fields, nearest_time_index, read_field, read_mesh
 
     mesh = read_mesh(xdmf)
     cell_fields = {n: f for n, f in list_fields(xdmf).items() if f.center == "Cell"}
@@ -185,20 +186,6 @@ def render_stress(xdmf: Path, png: Path, *, time_s: float | None = None, field: 
     return Picture(png=png, field=label, time_s=t, max_pa=float(values.max()))
 
 
-def pvd_entries(pvd: Path) -> list[tuple[float, Path]]:
-    """(time [s], data file) of every dataset of a ParaView ``.pvd`` collection, by time."""
-    import xml.etree.ElementTree as ET
-
-    pvd = Path(pvd)
-    try:
-        root = ET.parse(pvd).getroot()
-    except (OSError, ET.ParseError) as err:
-        raise FlexnetError(f"{pvd}: cannot read the collection ({err})") from None
-    out = [(float(ds.get("timestep", "nan")), pvd.parent / ds.get("file", ""))
-           for ds in root.iter("DataSet")]
-    return sorted(out, key=lambda e: e[0])
-
-
 def render_net(pvd: Path, png: Path, *, count: int = 6, scalars: str | None = "tension_n",
                title: str = "", window: tuple[int, int] = (1400, 800)) -> list[float]:
     """Draw ``count`` snapshots (evenly spread over the collection) of a net ``.pvd`` side by side
@@ -282,10 +269,10 @@ def _stress_job(xdmf: str, png: str, time_s: float | None = None, title: str = "
 
 def _kinds() -> dict:
     """Job kinds the child process runs: name → function(**args) returning a JSON-able value."""
-    from flexnet_fe.report import scenes
+    from flexnet_fe.report.scenes import render_animation, render_missile_stress, render_net_events
 
-    return {"stress": _stress_job, "missile": scenes.render_missile_stress,
-            "net_events": scenes.render_net_events, "animation": scenes.render_animation,
+    return {"stress": _stress_job, "missile": render_missile_stress,
+            "net_events": render_net_events, "animation": render_animation,
             "net_panels": _net_panels_job}
 
 

@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import Any
 
 from flexnet_fe.errors import FlexnetError
+from flexnet_fe.runs import RESOLVED, STATUS, SUMMARY
 
 STAGES = ("deploy", "collide", "shell", "flight")
 """Pipeline stages in the order they run (``flexnet_fe.config.Stage``)."""
@@ -97,9 +98,9 @@ def read_run(run_dir: Path) -> RunData:
     if not run_dir.is_dir():
         raise FlexnetError(f"{run_dir}: no such run directory")
     notes: list[str] = []
-    resolved = _read_json(run_dir / "resolved.json", notes)
-    status = _read_json(run_dir / "status.json", notes)
-    summary = _read_json(run_dir / "summary.json", notes)
+    resolved = _read_json(run_dir / RESOLVED, notes)
+    status = _read_json(run_dir / STATUS, notes)
+    summary = _read_json(run_dir / SUMMARY, notes)
     if resolved is None and status is None and summary is None:
         raise FlexnetError(f"{run_dir}: not a run directory (no resolved.json, status.json or summary.json)")
 

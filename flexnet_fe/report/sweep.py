@@ -29,6 +29,7 @@ from pathlib import Path
 from flexnet_fe.errors import FlexnetError
 from flexnet_fe.io import atomic_write_text
 from flexnet_fe.report.units import unit_of
+from flexnet_fe.runs import REPORT
 
 LABEL, ERROR = "label", "error"
 """The table's fixed columns (``flexnet_fe.sweep.run_many``)."""
@@ -339,7 +340,7 @@ def build_sweep_report(table_csv: Path, parameters: list[str] | None = None) -> 
     for r in rows:
         label = r.get(LABEL) or ""
         run = table_csv.parent / label
-        if label and (run / "report.html").is_file():
+        if label and (run / REPORT).is_file():
             links[label] = f"{label}/report.html"
         elif label and run.is_dir():
             links[label] = f"{label}/"

@@ -36,6 +36,7 @@ from flexnet_fe.shell.meshio import load_fin_mesh
 from flexnet_fe.shell.model import ShellModel, build_model
 from flexnet_fe.shell.recovery import locate_peak, stress_tensors, von_mises
 from flexnet_fe.shell.solve import ParallelSampler, recovery_for, run
+from flexnet_fe.runs import ENVELOPE_XDMF, FIELDS_XDMF, HISTORY
 
 ACCEL_COLUMNS = ("accel_body_x_mps2", "accel_body_y_mps2", "accel_body_z_mps2")
 
@@ -247,7 +248,7 @@ def solve_fin(model: ShellModel, loads: LoadHistory, shell: ShellConfig, end_tim
     out_dir.mkdir(parents=True, exist_ok=True)
     dt_crit, dt, n_steps, every, field_every, dofs = _time_steps(model, shell, end_time, log, name)
     R = recovery_for(model)
-    writer = _FieldWriter(model, R, out_dir / "fields.xdmf")
+    writer = _FieldWriter(model, R, out_dir / FIELDS_XDMF)
     with progress_bar(n_steps, f"shell {name}") as bar:
         done = [0]
 
@@ -272,8 +273,8 @@ def solve_fin(model: ShellModel, loads: LoadHistory, shell: ShellConfig, end_tim
             "max_principal_pa": res.p1, "max_abs_u_m": res.umax, "kinetic_energy_j": res.ke,
             "strain_energy_j": res.se, "external_work_j": res.work}
     if comm.rank == 0:
-        write_history_csv(out_dir / "history.csv", cols)
-    writer.envelope(res.env, out_dir / "envelope.xdmf")
+        write_history_csv(out_dir / HISTORY, cols)
+    writer.envelope(res.env, out_dir / ENVELOPE_XDMF)
     if res.failed_at:
         raise NumericalError(
             f"shell solver unstable at step {res.failed_at} (t = {res.failed_at * dt:.6e} s): "

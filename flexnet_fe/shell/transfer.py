@@ -191,18 +191,7 @@ def contact_transfer(fg: FinGeometry, points: np.ndarray, widths: np.ndarray, *,
     r = 0.5 * widths
     segs = _boundary_segments(fg)
 
-    # 0. contact points just outside the planform (a rope on the rounded/blunt edge, round-off)
-    #    are moved to the nearest boundary point when within plane_tol; farther is an error.
-    _, _, _, inside = _locate(fg, to3(p2))
-    out = np.flatnonzero(~inside)
-    if len(out):
-        near, dist, _ = _nearest_on_boundary(segs, p2[out])
-        far = out[dist > plane_tol]
-        if len(far):
-            k = far[0]
-            raise ValueError(f"contact event {k} at {points[k]} m lies outside the fin "
-                             f"(more than {plane_tol:.3e} m from its edge)")
-        p2[out] = near
+    _snap_to_planform(fg, segs, p2, points, plane_tol)
 
     # 1. disk stencils
     h = min_edge_length(fg.mesh)
@@ -245,12 +234,33 @@ def contact_transfer(fg: FinGeometry, points: np.ndarray, widths: np.ndarray, *,
             keep.append(mi)
             cells.append(c)
             Xs.append(Xp)
-    ev = np.concatenate(ev_idx)
-    w = np.concatenate(wts)
     kp = np.concatenate(keep)
-    cl = np.concatenate(cells)
-    Xa = np.concatenate(Xs)
-    ev, w, cl, Xa = ev[kp], w[kp], cl[kp], Xa[kp]
+    G = _assemble(fg, np.concatenate(ev_idx)[kp], np.concatenate(wts)[kp], np.concatenate(cells)[kp],
+                  np.concatenate(Xs)[kp], ne)
+    return _owned_rows(fg.V, G, comm)
+
+
+def _snap_to_planform(fg: FinGeometry, segs, p2: np.ndarray, points: np.ndarray, plane_tol: float) -> None:
+    """Contact points just outside the planform (a rope on the rounded/blunt edge, round-off)
+    are moved in place in ``p2`` (ne, 2) [m] to the nearest boundary point when within
+    ``plane_tol`` [m]; farther is a ValueError naming the event."""
+    _, _, _, inside = _locate(fg, fg.origin + p2[:, :1] * fg.e1 + p2[:, 1:2] * fg.e2)
+    out = np.flatnonzero(~inside)
+    if len(out):
+        near, dist, _ = _nearest_on_boundary(segs, p2[out])
+        far = out[dist > plane_tol]
+        if len(far):
+            k = far[0]
+            raise ValueError(f"contact event {k} at {points[k]} m lies outside the fin "
+                             f"(more than {plane_tol:.3e} m from its edge)")
+        p2[out] = near
+
+
+def _assemble(fg: FinGeometry, ev: np.ndarray, w: np.ndarray, cl: np.ndarray, Xa: np.ndarray,
+              ne: int) -> sparse.csr_matrix:
+    """G (local rows incl. ghosts, 3·ne) from quadrature points: event ``ev`` (q,), weight ``w``
+    (q,), cell ``cl`` (q,) and reference coordinates ``Xa`` (q, 2) — Q1 shape functions times
+    the weight on the three translational DOFs of the cell's four nodes."""
     N = _shape_q1(Xa[:, 0], Xa[:, 1])  # (m, 4)
     V = fg.V
     dm = V.dofmap.list.array.reshape(-1, 4)
@@ -259,8 +269,7 @@ def contact_transfer(fg: FinGeometry, points: np.ndarray, widths: np.ndarray, *,
     cols = (ev[:, None, None] * 3 + np.arange(3)[None, None, :]).repeat(4, axis=1)
     vals = (w[:, None] * N)[:, :, None].repeat(3, axis=2)
     n_loc = (V.dofmap.index_map.size_local + V.dofmap.index_map.num_ghosts) * NDOF_NODE
-    G = sparse.csr_matrix((vals.ravel(), (rows.ravel(), cols.ravel())), shape=(n_loc, 3 * ne))
-    return _owned_rows(V, G, comm)
+    return sparse.csr_matrix((vals.ravel(), (rows.ravel(), cols.ravel())), shape=(n_loc, 3 * ne))
 
 
 def _owned_rows(V, G: sparse.csr_matrix, comm) -> sparse.csr_matrix:

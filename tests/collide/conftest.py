@@ -15,7 +15,7 @@ from flexnet_fe.collide.config import NetSource
 from flexnet_fe.collide.scene import HeldNet, fin_planes, held_net, shape_bbox
 from flexnet_fe.contact.law import DAMPING_CODE, hysteresis_factor
 from flexnet_fe.missile.config import MissileConfig
-from flexnet_fe.missile.geometry import build_missile
+from flexnet_fe.missile.build import build_missile
 from flexnet_fe.missile.shapes import pack_shapes
 from flexnet_fe.net.config import TractionNet
 

@@ -11,7 +11,7 @@ import pytest
 from flexnet_fe.collide.config import CollideConfig
 from flexnet_fe.collide.simulate import simulate
 from flexnet_fe.errors import NumericalError
-from flexnet_fe.rigid import quat_to_matrix
+from flexnet_fe.frames import quat_to_matrix
 
 
 def test_momentum_balance_is_round_off(radar, log, scenes):

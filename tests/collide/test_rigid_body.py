@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from flexnet_fe.collide.rigid_body import body_rate, integrate_rigid
-from flexnet_fe.rigid import quat_to_matrix
+from flexnet_fe.frames import quat_to_matrix
 
 
 def test_constant_body_torque_about_principal_axis():

@@ -11,7 +11,7 @@ from scipy.integrate import quad
 from flexnet_fe.flight import airframe as AF
 from flexnet_fe.flight.aero import CoefficientScale, loads
 from flexnet_fe.missile.config import MissileConfig
-from flexnet_fe.missile.geometry import build_missile
+from flexnet_fe.missile.build import build_missile
 
 BETA = math.sqrt((1000.0 / 308.1) ** 2 - 1)     # launch: 1000 m/s at ~8–9 km
 ONE = CoefficientScale(1.0, 1.0, 1.0)

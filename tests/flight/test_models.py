@@ -159,7 +159,7 @@ def test_geometry_damage_removes_panel_lift():
 def test_unstable_design_airframe_is_an_error():
     from flexnet_fe.errors import FlexnetError
     from flexnet_fe.missile.config import MissileConfig
-    from flexnet_fe.missile.geometry import build_missile
+    from flexnet_fe.missile.build import build_missile
 
     # CG moved aft of every centre of pressure (3.4 m of 3.66 m): M_α > 0, no three-loop design.
     m = MissileConfig(preset="radar", mass_model="given", mass=231.0, cg=(-3.4, 0.0, 0.0),

@@ -9,7 +9,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from flexnet_fe.flight.eom import euler_rates, quat_rate
-from flexnet_fe.rigid import quat_to_matrix
+from flexnet_fe.frames import quat_to_matrix
 
 # NASA/TM-2015-218675 check-case data, copied from ../shared/reference/nesc/ (see data/NESC_README.md)
 NESC = Path(__file__).resolve().parent / "data" / "atmos02_tumbling_brick_sim02.csv"

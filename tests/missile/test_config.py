@@ -5,7 +5,7 @@ import pytest
 from pydantic import ValidationError
 
 from flexnet_fe.missile.config import MassModel, MissileConfig, MissilePreset, NoseShape
-from flexnet_fe.missile.geometry import build_missile
+from flexnet_fe.missile.build import build_missile
 
 
 def test_presets_differ_only_in_nose_and_name():

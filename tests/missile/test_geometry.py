@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 
 from flexnet_fe.missile.config import MissileConfig, NoseShape
-from flexnet_fe.missile.geometry import FinKind, body_profile, build_missile, nose_radius
+from flexnet_fe.missile.geometry import FinKind, body_profile, nose_radius
+from flexnet_fe.missile.build import build_missile
 
 
 @pytest.mark.parametrize("preset", ["radar", "infrared"])

@@ -5,7 +5,8 @@ import pytest
 from scipy.integrate import quad
 
 from flexnet_fe.missile.config import FinMaterial, FinSetConfig, MissileConfig, NoseShape
-from flexnet_fe.missile.geometry import FinKind, build_fin, build_missile
+from flexnet_fe.missile.geometry import FinKind, build_fin
+from flexnet_fe.missile.build import build_missile
 from flexnet_fe.missile.mass import body_mass_properties, fin_mass_properties
 
 RHO = 1800.0

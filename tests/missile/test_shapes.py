@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from flexnet_fe.missile.config import MissileConfig
-from flexnet_fe.missile.geometry import build_missile
+from flexnet_fe.missile.build import build_missile
 from flexnet_fe.missile.shapes import (FIN_PART_OFFSET, PART_BODY, PART_NOSE, body_closest_point,
                                        closest_points, fin_closest_point, pack_shapes, part_names,
                                        segment_body_closest, segment_core_closest)

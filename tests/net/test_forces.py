@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from flexnet_fe.net.forces import aero_coefficients, rope_tension, segment_aero_force, spring_force
-from flexnet_fe.net.kernels import net_forces
+from flexnet_fe.net.kernels import DeployModel, DeployState, net_forces
 
 K, C, L0 = 200.0, 3.0, 0.05
 
@@ -16,9 +16,11 @@ def production_forces(x, v, springs, rest, k, c, diameter, air=False, wind=(0.0,
     no hub: f (n, 3) [N], tension (m,) [N]."""
     n, m = len(x), len(springs)
     f, t = np.zeros((n, 3)), np.zeros(m)
-    net_forces(np.asarray(x, float), np.asarray(v, float), np.zeros(2), np.zeros(m), springs, np.full(m, rest),
-               np.full(m, k), np.full(m, c), np.zeros(m), np.full(m, diameter), np.zeros(m, np.bool_), np.zeros(m),
-               np.ones(n), -1, 0.1, 0.01, np.zeros(3), rho, np.asarray(wind, float), air, f, t, np.zeros(n))
+    model = DeployModel(springs, np.full(m, rest), np.full(m, k), np.full(m, c), np.zeros(m), np.full(m, diameter),
+                        np.zeros(m, np.bool_), np.zeros(m), np.ones(n), -1, 0.1, 0.01, 1.0, np.zeros(3),
+                        float(rho), np.asarray(wind, float), air)
+    state = DeployState(np.asarray(x, float), np.asarray(v, float), np.zeros(2), np.zeros(m), t)
+    net_forces(model, state, f, np.zeros(n))
     return f, t
 
 

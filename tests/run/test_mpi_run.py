@@ -28,7 +28,7 @@ SMALL = ["missile.mesh_size=0.05", "shell.end_time=3e-4", "shell.history_interva
 
 def fake_collide(ctx):
     """A rope load at the leading edge of the first wing: a half sine of 5 kN over 0.2 ms."""
-    from flexnet_fe.missile.geometry import build_missile
+    from flexnet_fe.missile.build import build_missile
 
     fin = build_missile(ctx.case.missile).fins[0]
     t = np.linspace(0.0, 2e-4, 11)

@@ -154,14 +154,14 @@ def test_two_processes_give_the_same_history(tmp_path):
 def test_runs_on_the_missile_meshers_fin(tmp_path):
     """Integration (wiring) with the missile model: its fin mesh and material, a rope load at
     the leading edge; the run is finite and the reported peak lies on the fin."""
-    geom = pytest.importorskip("flexnet_fe.missile.geometry")
+    build = pytest.importorskip("flexnet_fe.missile.build")
     mesh_mod = pytest.importorskip("flexnet_fe.missile.mesh")
     from flexnet_fe.missile.config import MissileConfig
     from flexnet_fe.shell.stage import fin_specs
 
     cfg = MissileConfig(preset="radar", mesh_size=0.05)
     paths = mesh_mod.write_meshes(cfg, tmp_path / "meshes")
-    fin = geom.build_missile(cfg).fins[0]
+    fin = build.build_missile(cfg).fins[0]
     t = np.linspace(0.0, 2e-4, 11)
     le_mid = 0.5 * (fin.corners[1] + fin.corners[2])
     np.savez(tmp_path / "c.npz", fin_names=np.array([fin.name]), t=t,
