@@ -22,13 +22,17 @@ import tempfile
 import time
 from pathlib import Path
 
+import numpy as np
+
 from flexnet_fe.atmosphere import isa
-from flexnet_fe.collide.scene import held_net
+from flexnet_fe.collide.crop import free_nodes
+from flexnet_fe.collide.scene import HeldNet, held_net, missile_attitude, shape_bbox
 from flexnet_fe.collide.simulate import simulate
 from flexnet_fe.config import load_case
 from flexnet_fe.errors import NumericalError
 from flexnet_fe.missile.build import build_missile
 from flexnet_fe.net.deploy import run_deploy
+from flexnet_fe.net.topology import segment_damping
 
 ROOT = Path(__file__).resolve().parents[1]
 CASES = ("radar_traction", "radar_rotary", "infrared_traction")
@@ -49,6 +53,55 @@ def _row(label, s, ref=None) -> str:
             f"{s['max_penetration_ratio']:.2f} | {s['steps']} | {s['wall_s']:.1f} | {rel} |")
 
 
+def subdivide_near_path(net: HeldNet, missile, cfg, k: int, margin: float, zeta: float) -> HeldNet:
+    """The held net with every rope segment near the flight path split into ``k`` equal segments
+    (convergence under rope subdivision near the contact; k = 1 returns ``net``).
+
+    Near = both end nodes within r_max + ``margin`` [m] of the line through the aim point along the
+    flight direction (r_max: the missile's bounding radius incl. fins). Hub links are not split.
+    Each split segment keeps E·A and its straight held geometry (new nodes on the chord, at rest);
+    rest length and slack offset are divided by k; its rope mass ρ A l0 (Eq. (2) lumping) is
+    re-lumped: the two old end nodes lose (1/2 − 1/(2k)) of it, each of the k − 1 new nodes gets
+    1/k. Dashpots follow Eq. (4) for the new pieces (c = 2 ζ √(μ K), μ the reduced end mass)."""
+    if k == 1:
+        return net
+    m = net.model
+    d = missile_attitude(cfg.incidence_angle, cfg.roll_angle)[:, 0]
+    aim = np.array([cfg.aim_point[0], cfg.aim_point[1], 0.0])
+    near = free_nodes(net.x, aim, d, float(shape_bbox(missile)[2]) + margin)
+    split = near[m.springs[:, 0]] & near[m.springs[:, 1]] & ~m.hub_link
+    idx = np.flatnonzero(split)
+    keep = np.flatnonzero(~split)
+    n0, ns = m.n_nodes, idx.size
+    seg_mass = net.rope.density * 0.25 * np.pi * net.rope.diameter**2 * m.rest_length[idx]
+    mass = np.array(m.mass, dtype=np.float64)
+    np.add.at(mass, m.springs[idx, 0], -(0.5 - 0.5 / k) * seg_mass)
+    np.add.at(mass, m.springs[idx, 1], -(0.5 - 0.5 / k) * seg_mass)
+    new_id = n0 + np.arange(ns * (k - 1)).reshape(ns, k - 1)
+    chain = np.column_stack([m.springs[idx, 0], new_id, m.springs[idx, 1]])  # (ns, k + 1)
+    frac = (np.arange(1, k) / k)[None, :, None]
+    xa, xb = net.x[m.springs[idx, 0]][:, None, :], net.x[m.springs[idx, 1]][:, None, :]
+    x_new = (xa + frac * (xb - xa)).reshape(-1, 3)
+    x0a, x0b = m.x0[m.springs[idx, 0]][:, None, :], m.x0[m.springs[idx, 1]][:, None, :]
+    x0_new = (x0a + frac * (x0b - x0a)).reshape(-1, 3)
+    mass = np.concatenate([mass, np.repeat(seg_mass / k, k - 1)])
+    springs_new = np.stack([chain[:, :-1], chain[:, 1:]], axis=-1).reshape(-1, 2)
+    rep = lambda a: np.repeat(np.asarray(a)[idx], k)  # noqa: E731 — per-piece copy of a segment field
+    rest_new = rep(m.rest_length) / k
+    ea_new = rep(m.stiffness_ea)
+    c_new = segment_damping(ea_new / rest_new, mass[springs_new[:, 0]], mass[springs_new[:, 1]], zeta)
+    cat = lambda a, b: np.concatenate([np.asarray(a)[keep], b])  # noqa: E731
+    model = dataclasses.replace(
+        m, x0=np.concatenate([m.x0, x0_new]), v0=np.concatenate([m.v0, np.zeros_like(x0_new)]), mass=mass,
+        springs=cat(m.springs, springs_new).astype(np.int64), rest_length=cat(m.rest_length, rest_new),
+        stiffness_ea=cat(m.stiffness_ea, ea_new), damping=cat(m.damping, c_new),
+        slack_offset=cat(m.slack_offset, rep(m.slack_offset) / k), diameter=cat(m.diameter, rep(m.diameter)),
+        drag_free=np.concatenate([m.drag_free, np.zeros(ns * (k - 1), dtype=bool)]),
+        hub_link=cat(m.hub_link, np.zeros(ns * k, dtype=bool)), anchor_angle=cat(m.anchor_angle, np.zeros(ns * k)))
+    rest_held = cat(net.rest_length, rep(net.rest_length) / k)
+    return dataclasses.replace(net, model=model, x=np.concatenate([net.x, x_new]), rest_length=rest_held)
+
+
 def _run(net, missile, cfg, air, log, **kw):
     try:
         return simulate(net, missile, cfg, air.gravity, log, **kw).summary
@@ -57,20 +110,29 @@ def _run(net, missile, cfg, air, log, **kw):
         return None
 
 
+def _write(doc: Path | None, lines: list[str]) -> None:
+    if doc:
+        doc.write_text(f"<!-- written by benchmarks/bench_collide.py on {time.strftime('%Y-%m-%d %H:%M')} -->\n"
+                       + "\n".join(lines) + "\n")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, default=None)
     ap.add_argument("--deploy-root", type=Path, default=None)
     ap.add_argument("--cases", nargs="*", default=list(CASES))
-    ap.add_argument("--dt-scales", default="1,0.5,0.25")
-    ap.add_argument("--moduli", default="3.16e10,1e11,3.16e11")
+    ap.add_argument("--dt-scales", default="1,0.5,0.25", help="case dt × each (fixed stiffness)")
+    ap.add_argument("--moduli", default="3.16e10,1e11,3.16e11", help="rope transverse moduli [Pa]; '' for none")
+    ap.add_argument("--subdivide", default="1,2,4", help="rope subdivision k near the path (at the case dt)")
+    ap.add_argument("--sub-margin", type=float, default=0.2,
+                    help="segments within the missile's bounding radius + this [m] of the path are split")
     ap.add_argument("--doc", type=Path, default=None)
     args = ap.parse_args()
     out = args.out or Path(tempfile.mkdtemp(prefix="bench_collide_"))
     log = logging.getLogger("bench_collide")
     logging.basicConfig(level=logging.WARNING)
     lines = ["| run | peak \\|a\\| CFC [m/s²] | raw peak [m/s²] | Δv/v | impulse [N s] | fin impulses [N s] | "
-             "contact [ms] | outcome | energy error | max δ/(r+h/2) | steps | wall [s] | vs finest dt "
+             "contact [ms] | outcome | energy error | max δ/(r+h/2) | steps | wall [s] | vs reference "
              "(peak, Δv/v, impulse, duration) |", "|" + "---|" * 13]
     for name in args.cases:
         case, _ = load_case(ROOT / "cases" / name)
@@ -80,23 +142,33 @@ def main() -> None:
             run_deploy(case.net, case.deploy, air, dep, log)
         net = held_net(case.net, case.collide.net_source, dep)
         missile = build_missile(case.missile)
-        scales = [float(x) for x in args.dt_scales.split(",")]
-        runs = {sc: _run(net, missile, case.collide, air, log, dt_scale=sc, n_snapshots=2) for sc in scales}
-        ref = runs[min(scales)]
+        scales = sorted((float(x) for x in args.dt_scales.split(",") if x), reverse=True)
+        runs = {}
         for sc in scales:
-            lines.append(_row(f"{name}, dt × {sc:g}", runs[sc], ref))
-        for e_t in (float(x) for x in args.moduli.split(",")):
+            runs[sc] = _run(net, missile, case.collide, air, log, dt_scale=sc, n_snapshots=2)
+            print(_row(f"{name}, dt × {sc:g}", runs[sc]), flush=True)
+        ref = runs[min(scales)] if scales else None
+        lines += [_row(f"{name}, dt × {sc:g} (vs dt × {min(scales):g})", runs[sc], ref) for sc in scales]
+        _write(args.doc, lines)
+        subs = [int(x) for x in args.subdivide.split(",") if x]
+        sub_runs = {}
+        for k in subs:
+            fine = subdivide_near_path(net, missile, case.collide, k, args.sub_margin, case.net.damping_ratio)
+            sub_runs[k] = runs.get(1.0) if k == 1 and 1.0 in runs else _run(fine, missile, case.collide, air, log,
+                                                                              n_snapshots=2)
+            print(_row(f"{name}, rope split k = {k}", sub_runs[k]), flush=True)
+        if subs:
+            lines += [_row(f"{name}, rope split k = {k} near the path, case dt (vs k = {max(subs)})", sub_runs[k],
+                           sub_runs[max(subs)]) for k in subs]
+            _write(args.doc, lines)
+        for e_t in (float(x) for x in args.moduli.split(",") if x):
             if e_t == net.rope.transverse_modulus:
                 continue
             soft = dataclasses.replace(net, rope=net.rope._replace(transverse_modulus=e_t))
-            lines.append(_row(f"{name}, E_t = {e_t:.3g} Pa", _run(soft, missile, case.collide, air, log,
-                                                                   n_snapshots=2), runs[1.0]))
-        print("\n".join(lines[-len(scales) - 2:]), flush=True)
-    text = "\n".join(lines) + "\n"
-    print(text)
-    if args.doc:
-        args.doc.write_text(f"<!-- written by benchmarks/bench_collide.py on {time.strftime('%Y-%m-%d %H:%M')} -->\n"
-                            + text)
+            lines.append(_row(f"{name}, E_t = {e_t:.3g} Pa (vs case)", _run(soft, missile, case.collide, air, log,
+                                                                             n_snapshots=2), runs.get(1.0)))
+            _write(args.doc, lines)
+    print("\n".join(lines))
 
 
 if __name__ == "__main__":
