@@ -118,7 +118,7 @@ def stress_field(fields: dict[str, np.ndarray]) -> tuple[str, np.ndarray]:
 def _nodal_counterpart(xdmf: Path, label: str, t: float, n_points: int) -> np.ndarray | None:
     """The recovered nodal field ``<label without _pa>_nodal_pa`` [Pa] (n_points,) of ``xdmf`` at
     time ``t`` (the envelope: its only time), or None when the file has none."""
-    from flexnet_fe.report.xdmf import list_fields, nearest_time_index, read_field
+    from flexnet_fe.xdmf import list_fields, nearest_time_index, read_field
 
     if not label.endswith("_pa"):
         return None
