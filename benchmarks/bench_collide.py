@@ -1,16 +1,19 @@
 """Collision benchmark and convergence study (not a test): for each paper case, the headline numbers
-under dt → 0 at fixed stiffness, under a decade of contact modulus, and the kernel cost per
-spring-step.
+under dt → 0 at fixed stiffness, under rope subdivision near the contact, under a decade of contact
+modulus, and the kernel cost per spring-step.
 
     .venv/bin/python benchmarks/bench_collide.py [--out DIR] [--deploy-root DIR] [--cases ...]
-                                                 [--dt-scales 1,0.5,0.25] [--moduli 3.16e10,1e11,3.16e11]
-                                                 [--doc docs/collide_convergence.md]
+                                                 [--dt-scales 1,0.5,0.25] [--subdivide 1,2,4] [--sub-margin 0.2]
+                                                 [--moduli 3.16e10,1e11,3.16e11] [--doc FILE]
 
 Each case is deployed once (its [deploy] table) into DIR/<case>/deploy — or the deploy stage of an
-existing run directory DEPLOY_ROOT/<case>/deploy is used — then collided with the case's tables
-(the case's dt × each scale; each transverse modulus at the case's dt rule). Every run's headline
-numbers (CFC-filtered peak |a|, Δv/v, impulse per fin, contact duration, outcome, energy error)
-are written as markdown tables to --doc, with the change relative to the finest dt.
+existing run directory DEPLOY_ROOT/<case>/deploy is used — then collided with the case's tables:
+the case's dt × each scale; each rope subdivision k near the flight path (``subdivide_near_path``)
+at the case's dt rule; each transverse modulus at the case's dt rule. Every run's headline numbers
+(CFC-filtered peak |a|, Δv/v, impulse per fin, contact duration, outcome, energy error) are printed
+as they arrive and written as a markdown table to --doc (rewritten after each group), with the
+change relative to the finest dt / the finest k / the case's modulus. docs/collide_convergence.md
+is assembled from these tables.
 """
 
 from __future__ import annotations

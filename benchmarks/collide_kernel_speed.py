@@ -10,24 +10,36 @@ if present), then simulate REPS times (rep 0 may include numba compilation).
 
 Alternate old and new invocations and compare medians (docs/performance.md).
 """
-import logging, sys, time
+import logging
+import sys
 from pathlib import Path
+
 from flexnet_fe.atmosphere import isa
 from flexnet_fe.collide.scene import held_net
 from flexnet_fe.collide.simulate import simulate
 from flexnet_fe.config import load_case
 from flexnet_fe.missile.geometry import build_missile
 from flexnet_fe.net.deploy import run_deploy
-root, label, dep = Path(sys.argv[1]), sys.argv[2], Path(sys.argv[3])
-log = logging.getLogger("speed"); logging.basicConfig(level=logging.WARNING)
-case, _ = load_case(root / "cases" / "radar_traction")
-air = isa(case.atmosphere.altitude)
-if not (dep / "net_state.npz").is_file():
-    run_deploy(case.net, case.deploy, air, dep, log)
-net = held_net(case.net, case.collide.net_source, dep)
-missile = build_missile(case.missile)
-for rep in range(int(sys.argv[4]) if len(sys.argv) > 4 else 2):
-    s = simulate(net, missile, case.collide, air.gravity, log, n_snapshots=2).summary
-    ns = s["wall_s"] / (s["steps"] * s["active_segments"]) * 1e9
-    print(f"{label} rep {rep}: steps {s['steps']} active {s['active_segments']} wall {s['wall_s']:.2f} s "
-          f"ns/spring-step {ns:.1f} load {open('/proc/loadavg').read().split()[0]}", flush=True)
+
+
+def main() -> None:
+    root, label, dep = Path(sys.argv[1]), sys.argv[2], Path(sys.argv[3])
+    reps = int(sys.argv[4]) if len(sys.argv) > 4 else 2
+    log = logging.getLogger("collide_kernel_speed")
+    logging.basicConfig(level=logging.WARNING)
+    case, _ = load_case(root / "cases" / "radar_traction")
+    air = isa(case.atmosphere.altitude)
+    if not (dep / "net_state.npz").is_file():
+        run_deploy(case.net, case.deploy, air, dep, log)
+    net = held_net(case.net, case.collide.net_source, dep)
+    missile = build_missile(case.missile)
+    for rep in range(reps):
+        s = simulate(net, missile, case.collide, air.gravity, log, n_snapshots=2).summary
+        ns = s["wall_s"] / (s["steps"] * s["active_segments"]) * 1e9
+        load = Path("/proc/loadavg").read_text().split()[0]
+        print(f"{label} rep {rep}: steps {s['steps']} active {s['active_segments']} wall {s['wall_s']:.2f} s "
+              f"ns/spring-step {ns:.1f} load {load}", flush=True)
+
+
+if __name__ == "__main__":
+    main()
