@@ -18,7 +18,7 @@ from flexnet_fe.atmosphere import isa
 from flexnet_fe.collide.scene import held_net
 from flexnet_fe.collide.simulate import simulate
 from flexnet_fe.config import load_case
-from flexnet_fe.missile.geometry import build_missile
+from flexnet_fe.missile.build import build_missile
 from flexnet_fe.net.deploy import run_deploy
 
 
