@@ -9,6 +9,7 @@ import numpy as np
 from numba import njit
 
 from flexnet_fe.errors import NumericalError
+from flexnet_fe.net.forces import rope_elastic_energy
 from flexnet_fe.net.hub import wrap_geometry
 from flexnet_fe.net.kernels import DeployModel, DeployState, advance, net_forces
 from flexnet_fe.net.topology import NetModel
@@ -110,6 +111,15 @@ def _lengths(model, state):
     return out
 
 
+@njit(cache=True)
+def _elastic_energy(stretch, stiffness):
+    """Σ ½ K s² [J] over taut segments (``net.forces.rope_elastic_energy``, the collide kernel's too)."""
+    pe = 0.0
+    for s in range(stretch.shape[0]):
+        pe += rope_elastic_energy(stretch[s], stiffness[s])
+    return pe
+
+
 _NO_LOADS = Environment(gravity=np.zeros(3), rho=0.0, wind=np.zeros(3), air=False)
 
 
@@ -125,7 +135,7 @@ def energies(model: NetModel, state: NetState, gravity=(0.0, 0.0, 0.0)) -> dict[
         ke += 0.5 * model.hub_inertia * state.hub[1] ** 2
     l = segment_lengths(model, state)
     stretch = l - (model.rest_length - model.slack_offset)
-    pe = float(np.sum(0.5 * model.stiffness * np.where(stretch > 0, stretch, 0.0) ** 2))
+    pe = _elastic_energy(stretch, model.stiffness)
     pg = -float(np.sum(model.mass * (state.x @ np.asarray(gravity, dtype=float))))
     return {"kinetic": ke, "elastic": pe, "gravity": pg}
 
