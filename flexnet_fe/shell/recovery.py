@@ -193,6 +193,17 @@ def _measures(E, nu, z, a, b, g):
 
 
 @njit(cache=True)
+def _surfaces(E, nu, z, m, k, nodal, i):
+    """Top and bottom surface measures of node ``i`` from its membrane strains m = (ε11, ε22, γ12)
+    and curvatures k [1/m] at z = ±t/2: writes (vm_top, vm_bot, p1_top, p1_bot) [Pa] into
+    ``nodal[i]`` and returns (max von Mises, max principal) of the two surfaces."""
+    vt, pt = _measures(E, nu, z, m[0] + z * k[0], m[1] + z * k[1], m[2] + z * k[2])
+    vb, pb = _measures(E, nu, z, m[0] - z * k[0], m[1] - z * k[1], m[2] - z * k[2])
+    nodal[i, 0], nodal[i, 1], nodal[i, 2], nodal[i, 3] = vt, vb, pt, pb
+    return max(vt, vb), max(pt, pb)
+
+
+@njit(cache=True)
 def nodal_from_numerators(R, u, nodal, n_owned):
     """Nodal (vm_top, vm_bot, p1_top, p1_bot) [Pa] of the owned nodes from R.num (plane
     stress at z = ±t/2 of the recovered ε*, κ*); returns (max vm, its node, max p1, max |u|
@@ -205,13 +216,10 @@ def nodal_from_numerators(R, u, nodal, n_owned):
         w = winv[i]
         e0, e1, e2 = num[i, 0] * w, num[i, 1] * w, num[i, 2] * w
         k0, k1, k2 = num[i, 3] * w, num[i, 4] * w, num[i, 5] * w
-        vt, pt = _measures(E, nu, z, e0 + z * k0, e1 + z * k1, e2 + z * k2)
-        vb, pb = _measures(E, nu, z, e0 - z * k0, e1 - z * k1, e2 - z * k2)
-        nodal[i, 0], nodal[i, 1], nodal[i, 2], nodal[i, 3] = vt, vb, pt, pb
-        vm = max(vt, vb)
+        vm, p1 = _surfaces(E, nu, z, (e0, e1, e2), (k0, k1, k2), nodal, i)
         if vm > vmax:
             vmax, node = vm, i
-        p1max = max(p1max, pt, pb)
+        p1max = max(p1max, p1)
         b = NB * i
         umax = max(umax, u[b] * u[b] + u[b + 1] * u[b + 1] + u[b + 2] * u[b + 2])
     return vmax, node, p1max, np.sqrt(umax)
@@ -240,13 +248,10 @@ def sample_nodes(R, u, nodal):
             s3 += d1 * u[b + 3]
             s4 += d2 * u[b + 4]
             s5 += d2 * u[b + 3] + d1 * u[b + 4]
-        vt, pt = _measures(E, nu, z, s0 + z * s3, s1 + z * s4, s2 + z * s5)
-        vb, pb = _measures(E, nu, z, s0 - z * s3, s1 - z * s4, s2 - z * s5)
-        nodal[i, 0], nodal[i, 1], nodal[i, 2], nodal[i, 3] = vt, vb, pt, pb
-        vm = max(vt, vb)
+        vm, p1 = _surfaces(E, nu, z, (s0, s1, s2), (s3, s4, s5), nodal, i)
         if vm > vmax:
             vmax, node = vm, i
-        p1max = max(p1max, pt, pb)
+        p1max = max(p1max, p1)
         b = NB * i
         umax = max(umax, u[b] * u[b] + u[b + 1] * u[b + 1] + u[b + 2] * u[b + 2])
     return vmax, node, p1max, np.sqrt(umax)
