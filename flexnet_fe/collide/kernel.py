@@ -129,6 +129,21 @@ def _near_fin(model, fi, pa, pb):
 
 
 @njit(cache=True)
+def _apply_to_node(model, state, f, node, weight, f0, f1, f2, dt):
+    """Add ``weight`` × the contact force (f0, f1, f2) [N] to a free node's force row of ``f``;
+    a held node (crop boundary) does not move, so its impulse [N s] goes to the held-node
+    accumulator that closes the momentum balance."""
+    if model.free[node]:
+        f[node, 0] += weight * f0
+        f[node, 1] += weight * f1
+        f[node, 2] += weight * f2
+    else:
+        state.acc[A_PHELD] += weight * f0 * dt
+        state.acc[A_PHELD + 1] += weight * f1 * dt
+        state.acc[A_PHELD + 2] += weight * f2 * dt
+
+
+@njit(cache=True)
 def _apply(model, state, wk, slot, fin, delta, s, dt):
     """Force of one (segment, part) contact on the net and the missile, Eq. (28), (29), (32).
 
@@ -157,20 +172,8 @@ def _apply(model, state, wk, slot, fin, delta, s, dt):
     vt0, vt1, vt2 = vr0 - vn * nw0, vr1 - vn * nw1, vr2 - vn * nw2
     ft0, ft1, ft2 = friction_force(fn, model.mu, vt0, vt1, vt2, model.v_reg)
     f0, f1, f2 = fn * nw0 + ft0, fn * nw1 + ft1, fn * nw2 + ft2
-    if model.free[i]:
-        f[i, 0] += w * f0
-        f[i, 1] += w * f1
-        f[i, 2] += w * f2
-    else:
-        for k, fk in enumerate((f0, f1, f2)):
-            state.acc[A_PHELD + k] += w * fk * dt
-    if model.free[j]:
-        f[j, 0] += s * f0
-        f[j, 1] += s * f1
-        f[j, 2] += s * f2
-    else:
-        for k, fk in enumerate((f0, f1, f2)):
-            state.acc[A_PHELD + k] += s * fk * dt
+    _apply_to_node(model, state, f, i, w, f0, f1, f2, dt)
+    _apply_to_node(model, state, f, j, s, f0, f1, f2, dt)
     fmt[0] -= f0
     fmt[1] -= f1
     fmt[2] -= f2
