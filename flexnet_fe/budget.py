@@ -5,7 +5,8 @@ cannot work (inconsistent geometry, non-finite derived values) or would exhaust 
 The estimates are our own order-of-magnitude formulas, documented next to each one (they follow
 the stage code's array sizes: ``net/deploy.py``, ``collide/simulate.py``, ``flight/simulate.py``,
 the shell's sparse matrices). They are deliberately simple: they must be cheap (``validate``
-imports no numba, dolfinx or gmsh) and are meant to catch the orders of magnitude that turn a
+imports no dolfinx or gmsh and compiles nothing; the rope checks import ``net.topology`` for the
+builders' own rope area and EA/l0, which loads numba, ≈ 0.5 s) and are meant to catch the orders of magnitude that turn a
 typo into a MemoryError, a std::bad_alloc or a run of a year — not to predict a wall time.
 
 Budget (docs/validation.md "Run machinery"): memory ≤ the machine's available memory
@@ -90,12 +91,15 @@ def check_net(net, file) -> tuple[float, float, float, float]:
     if net.mesh_size > span:
         raise CaseError(file, "net.mesh_size", f"{net.mesh_size:g} m is larger than {span_field} = {span:g} m "
                         "(the net would have no mesh cell)")
-    area = _finite(file, "net.rope_diameter", "rope cross-section π d²/4 [m²]", math.pi * net.rope_diameter * net.rope_diameter / 4)
+    # the net builders' own formulas (their one home), so the check sees the numbers the run will use
+    from flexnet_fe.net.topology import rope_area, segment_stiffness
+
+    area = _finite(file, "net.rope_diameter", "rope cross-section π d²/4 [m²]", float(rope_area(net.rope_diameter)))
     _finite(file, "net.density", "rope mass per length ρA [kg/m]", net.density * area)
-    _finite(file, "net.youngs_modulus", "rope axial stiffness EA [N]", net.youngs_modulus * area)
+    ea = _finite(file, "net.youngs_modulus", "rope axial stiffness EA [N]", net.youngs_modulus * area)
     c = _finite(file, "net.youngs_modulus", "rope wave speed √(E/ρ) [m/s]", math.sqrt(net.youngs_modulus / net.density))
     nodes, segs, l0 = net_counts(net)
-    _finite(file, "net.mesh_size", "segment stiffness EA/l0 [N/m]", net.youngs_modulus * area / l0)
+    _finite(file, "net.mesh_size", "segment stiffness EA/l0 [N/m]", float(segment_stiffness(ea, l0)))
     return nodes, segs, l0, c
 
 

@@ -10,7 +10,8 @@ Every file name the run machinery writes or reads is named here once::
     <run>/.<stage>.partial/     where a running stage writes; renamed to <stage>/ when it ends
     <run>/<stage>/history.csv   one row per output time (every stage)
     <run>/deploy/net_state.npz  the net at maximum area (read by collide); net.pvd snapshots
-    <run>/collide/fin_contacts.npz  contact forces on the fins (read by shell)
+    <run>/collide/fin_contacts.npz  contact forces on the fins (read by shell); net.pvd and
+                                missile.pvd snapshots (read by the report)
     <run>/shell/<fin>/fields.xdmf, envelope.xdmf  stress frames; peak envelope (read by flight
                                 damage and the report)
     <run>/report.html           the report
@@ -55,6 +56,8 @@ REPORT = "report.html"
 NET_STATE = "net_state.npz"
 """deploy/: the net at maximum area, read by collide (``net.deploy.write_net_state``)."""
 NET_PVD = "net.pvd"
+MISSILE_PVD = "missile.pvd"
+"""collide/: the missile body at each snapshot (beside net.pvd), read by the report's pictures."""
 FIN_CONTACTS = "fin_contacts.npz"
 """collide/: contact forces on the fins, read by shell (fields in DESIGN.md §3)."""
 FIELDS_XDMF = "fields.xdmf"
@@ -63,6 +66,8 @@ ENVELOPE_XDMF = "envelope.xdmf"
 """shell/<fin>/: peak-over-time stresses, read by flight damage and the report."""
 SWEEP_TABLE = "sweep.csv"
 BATCH_TABLE = "batch.csv"
+MAP_TABLE = "map.csv"
+"""the engagement map's table (``flexnet_fe.engagement_map``; its picture has the same stem, .png)."""
 
 STATES = ("pending", "running", "done", "failed", "interrupted", "stale")
 

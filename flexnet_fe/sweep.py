@@ -142,23 +142,27 @@ def variant_done(run_dir: Path, case) -> bool:
                and stages[s.value].get("input_hash") == hashes.get(s) for s in case.case.stages)
 
 
+def run_or_reuse(variant: Variant, out: str, force: bool = False) -> dict[str, Any]:
+    """Run one variant into ``out/label``, or reuse that run directory when all its stages are
+    done with the same inputs (unless ``force``); returns its summary. Errors propagate."""
+    from flexnet_fe.pipeline import run_case
+
+    run_dir = Path(out) / variant.label
+    case, case_dir = load_case(variant.case_path, list(variant.overrides))
+    if variant.sweep_point:
+        case = without_builtin_sweep(case)
+    if not force and variant_done(run_dir, case):
+        LOG.info("%s: done earlier with the same inputs, reused (--force redoes it)", variant.label)
+        return read_json(run_dir / SUMMARY)
+    return run_case(case, case_dir, run_dir, force=force, mpi=False)
+
+
 def run_variant(variant: Variant, out: str, force: bool = False) -> dict[str, Any]:
     """Run (or reuse) one variant into ``out/label``; returns its table row. Errors become the
     row's ``error``; an interrupt propagates. Top-level so process pools can pickle it."""
-    from flexnet_fe.pipeline import run_case
-
     row: dict[str, Any] = {LABEL: variant.label, **dict(variant.params)}
-    run_dir = Path(out) / variant.label
     try:
-        case, case_dir = load_case(variant.case_path, list(variant.overrides))
-        if variant.sweep_point:
-            case = without_builtin_sweep(case)
-        if not force and variant_done(run_dir, case):
-            LOG.info("%s: done earlier with the same inputs, reused (--force redoes it)", variant.label)
-            summary = read_json(run_dir / SUMMARY)
-        else:
-            summary = run_case(case, case_dir, run_dir, force=force, mpi=False)
-        row.update(flatten(summary))
+        row.update(flatten(run_or_reuse(variant, out, force)))
         row[ERROR] = ""
     except StageInterrupted as err:
         LOG.error("%s: %s", variant.label, err)

@@ -4,8 +4,8 @@ Modules: ``airframe`` (component build-up of the case's missile: nose, body, 8 f
 damage by panel), ``aero`` (the force law, pure), ``autopilot`` (three-loop design, loop
 margins), ``guidance``, ``target``, ``eom``, ``simulate`` (model data, pure right-hand side, RK4
 kernel), ``damage`` (fin stress → lost area), ``miss``, ``stage`` (the stage and its sweep),
-``plots``, ``engagement_map`` (outcome map over aim point × incidence × net, a driver over the
-pipeline).
+``plots``, ``outcome`` (an engagement's outcome from its summary: miss, hit, fin margins; the
+map over aim point × incidence × net that runs the cases is ``flexnet_fe.engagement_map``).
 
 Frames used by this package (``flexnet_fe.frames`` leaves the flight frame to us)
 ----------------------------------------------------------------------------------

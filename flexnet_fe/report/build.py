@@ -33,7 +33,7 @@ from flexnet_fe.report.rundir import RunData, StageInfo, fin_results, flatten, r
 from flexnet_fe.report.units import (PA_TO_MPA, S_TO_MS, format_value, unit_label, unit_of,
                                      unknown_units)
 from flexnet_fe.report.verdict import Verdict, build_verdict
-from flexnet_fe.runs import REPORT
+from flexnet_fe.runs import REPORT, STAGE_LOG
 
 LOG = logging.getLogger("flexnet.report")
 
@@ -66,9 +66,9 @@ def headline_rows(section: dict, skip: set[str] = frozenset()) -> list[Row]:
 
 
 def _log_tail(stage: StageInfo) -> str | None:
-    if stage.folder is None or not (stage.folder / "log.txt").is_file():
+    if stage.folder is None or not (stage.folder / STAGE_LOG).is_file():
         return None
-    lines = (stage.folder / "log.txt").read_text(errors="replace").splitlines()
+    lines = (stage.folder / STAGE_LOG).read_text(errors="replace").splitlines()
     return "\n".join(lines[-LOG_TAIL_LINES:])
 
 
@@ -92,8 +92,8 @@ def _stage_view(run: RunData, stage: StageInfo) -> dict[str, Any]:
     return {"info": stage, "rows": headline_rows(stage.section, skip) if stage.complete else [],
             "figures": [], "pictures": [],
             "pngs": [str(p) for p in stage_pngs(run.run_dir, stage.folder)] if stage.folder else [],
-            "log": str((stage.folder / "log.txt").relative_to(run.run_dir))
-            if stage.folder and (stage.folder / "log.txt").is_file() else None,
+            "log": str((stage.folder / STAGE_LOG).relative_to(run.run_dir))
+            if stage.folder and (stage.folder / STAGE_LOG).is_file() else None,
             "log_tail": _log_tail(stage) if stage.state == "failed" else None,
             # a stage the case does not ask for and that left nothing: status row only
             "show": stage.requested is not False or stage.folder is not None or stage.section is not None}

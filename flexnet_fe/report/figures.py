@@ -21,7 +21,7 @@ from flexnet_fe.io import read_history_csv
 from flexnet_fe.report.rundir import RunData, fin_results
 from flexnet_fe.report.units import PA_TO_MPA, S_TO_MS, TIME_AXIS, axis_unit
 from flexnet_fe.report.verdict import Verdict
-from flexnet_fe.runs import ENVELOPE_XDMF, FIELDS_XDMF, HISTORY, NET_PVD
+from flexnet_fe.runs import ENVELOPE_XDMF, FIELDS_XDMF, HISTORY, MISSILE_PVD, NET_PVD
 
 
 @dataclass(frozen=True)
@@ -319,7 +319,7 @@ def _collide_jobs(run, view, out_dir, notes, jobs, later, top) -> None:
     if plot:
         view["figures"].append(Figure(plot, "Missile CG acceleration magnitude and attitude change vs time, from "
                                             "collide/history.csv (axis units chosen to fit the values)."))
-    net_pvd, mis_pvd = run.run_dir / "collide" / NET_PVD, run.run_dir / "collide" / "missile.pvd"
+    net_pvd, mis_pvd = run.run_dir / "collide" / NET_PVD, run.run_dir / "collide" / MISSILE_PVD
     if not (net_pvd.is_file() and mis_pvd.is_file()):
         return
     events = contact_events(run)

@@ -1,16 +1,17 @@
 """The engagement map: where must the net meet the missile to defeat it?
 
-A thin driver over the stable pipeline API (``flexnet_fe.pipeline.run_case``): for every point of
-a grid over the aim point on the net (world x, y [m]), the impact incidence [rad] and the base
-case (one per net type), it runs deploy → collide → shell → flight into ``<out>/<label>/`` and
-gathers the outcome — miss distance, hit, the fins' margins (allowable / peak von Mises − 1, from
-the shell summary) and the damage the flight flew with — into ``<out>/map.csv`` and
-``<out>/map.png``. Points run in parallel processes (``-j``) and a point whose run directory says
-every stage is done is not run again (resumable).
+A driver in the run layer, over the sweep's run-or-reuse of one variant
+(``flexnet_fe.sweep.run_or_reuse``): for every point of a grid over the aim point on the net
+(world x, y [m]), the impact incidence [rad] and the base case (one per net type), it runs
+deploy → collide → shell → flight into ``<out>/<label>/`` and gathers the outcome
+(``flexnet_fe.flight.outcome``: miss distance, hit, the fins' margins allowable / peak von Mises
+− 1 from the shell summary, the damage the flight flew with) into ``<out>/map.csv`` and
+``<out>/map.png``. Points run in parallel processes (``-j``); a point whose run directory says
+every stage is done with the same inputs is not run again (resumable).
 
 Run (quick resolution, see docs/validation.md "engagement map"):
 
-    python -m flexnet_fe.flight.engagement_map cases/engagement_map \\
+    python -m flexnet_fe.engagement_map cases/engagement_map \\
         --aim-x=-0.3,0,0.3 --aim-y=0,0.3 --incidence-deg 0,10 -j 2 --out runs/engagement_map
 """
 
@@ -26,7 +27,9 @@ from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 
-from flexnet_fe.runs import STATUS, SUMMARY
+from flexnet_fe.errors import FlexnetError
+from flexnet_fe.flight.outcome import outcome
+from flexnet_fe.runs import MAP_TABLE
 
 STAGES = ("deploy", "collide", "shell", "flight")
 COLUMNS = ("label", "case", "aim_x_m", "aim_y_m", "incidence_deg", "miss_distance_m", "hit",
@@ -57,37 +60,15 @@ def grid(cases: list[str], aim_x: list[float], aim_y: list[float], incidence_deg
     return [MapPoint(c, x, y, i) for c, x, y, i in itertools.product(cases, aim_x, aim_y, incidence_deg)]
 
 
-def outcome(summary: dict) -> dict:
-    """Map row values from a run's summary.json: flight outcome and the fins' margins
-    allowable/peak − 1 (negative = the fin's peak exceeds its allowable)."""
-    fl, sh = summary.get("flight", {}), summary.get("shell", {})
-    # the allowable: the shell summary's (fin material), else the one the flight's damage law used
-    used = fl.get("damage_from_shell", {}).get("allowable_pa", {})
-    margins = {k: (v.get("allowable_pa") or used[k]) / v["peak_von_mises_pa"] - 1.0 for k, v in sh.items()
-               if isinstance(v, dict) and v.get("peak_von_mises_pa") and (v.get("allowable_pa") or k in used)}
-    crit = min(margins, key=margins.get) if margins else ""
-    return {"miss_distance_m": fl.get("miss_distance_m"), "hit": fl.get("hit"),
-            "min_fin_margin": margins.get(crit) if crit else None, "critical_fin": crit,
-            "wing_damage": fl.get("wing_damage"), "rudder_effectiveness": fl.get("rudder_effectiveness")}
-
-
 def run_point(point: MapPoint, out: str) -> dict:
-    """Run one point (or reuse its finished run directory) and return its map row."""
-    from flexnet_fe.config import Stage, load_case
-    from flexnet_fe.errors import FlexnetError
-    from flexnet_fe.pipeline import run_case
+    """Run one point (or reuse its run directory when every stage is done with the same inputs,
+    as a sweep does) and return its map row. Top-level so process pools can pickle it."""
+    from flexnet_fe.sweep import Variant, run_or_reuse
 
-    run_dir = Path(out) / point.label
     row = {"label": point.label, "case": Path(point.case).name, "aim_x_m": point.aim_x_m,
            "aim_y_m": point.aim_y_m, "incidence_deg": point.incidence_deg, "error": ""}
-    status = run_dir / STATUS
     try:
-        done = status.is_file() and all(json.loads(status.read_text())["stages"].get(s, {}).get("state") == "done"
-                                        for s in STAGES)
-        if not done:
-            case, case_dir = load_case(Path(point.case), point.overrides())
-            run_case(case, case_dir, run_dir, [Stage(s) for s in STAGES])
-        row.update(outcome(json.loads((run_dir / SUMMARY).read_text())))
+        row.update(outcome(run_or_reuse(Variant(point.label, Path(point.case), tuple(point.overrides())), out)))
     except (FlexnetError, ArithmeticError, ValueError, RuntimeError, KeyError) as err:
         row["error"] = str(err).replace("\n", " ")
     return row
@@ -156,8 +137,8 @@ def run_map(points: list[MapPoint], out: Path, jobs: int = 1) -> list[dict]:
             rows = list(pool.map(run_point, points, [str(out)] * len(points)))
     else:
         rows = [run_point(p, str(out)) for p in points]
-    write_csv(rows, out / "map.csv")
-    plot_map(rows, out / "map.png")
+    write_csv(rows, out / MAP_TABLE)
+    plot_map(rows, (out / MAP_TABLE).with_suffix(".png"))
     return rows
 
 
@@ -169,7 +150,7 @@ def _floats(text: str) -> list[float]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m flexnet_fe.flight.engagement_map", description=__doc__.split("\n\n")[0])
+    ap = argparse.ArgumentParser(prog="python -m flexnet_fe.engagement_map", description=__doc__.split("\n\n")[0])
     ap.add_argument("cases", nargs="+", help="base case directories (one per net type), each with a [flight] table")
     ap.add_argument("--aim-x", type=_floats, default=[0.0], help="aim points x [m], comma-separated")
     ap.add_argument("--aim-y", type=_floats, default=[0.0], help="aim points y [m], comma-separated")
@@ -179,7 +160,8 @@ def main(argv: list[str] | None = None) -> int:
     a = ap.parse_args(argv)
     rows = run_map(grid(a.cases, a.aim_x, a.aim_y, a.incidence_deg), a.out, a.jobs)
     bad = [r for r in rows if r["error"]]
-    print(f"{len(rows)} points, {len(bad)} failed; {a.out / 'map.csv'}, {a.out / 'map.png'}")
+    table = a.out / MAP_TABLE
+    print(f"{len(rows)} points, {len(bad)} failed; {table}, {table.with_suffix('.png')}")
     return 0 if not bad else 1
 
 

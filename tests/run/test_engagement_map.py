@@ -1,5 +1,7 @@
-"""The engagement-map driver: grid → case overrides, run-directory summary → map row, CSV and picture.
-(Running the stages themselves is the pipeline's, tested elsewhere; a real map is in docs/validation.md.)"""
+"""The engagement map: grid → case overrides (run layer, ``flexnet_fe.engagement_map``), a run's
+summary → outcome row (``flexnet_fe.flight.outcome``), CSV and picture. (Running the stages and
+reusing a done run directory are the pipeline's and the sweep's, tested in tests/run and
+tests/test_sweep.py; a real map is in docs/validation.md.)"""
 
 from __future__ import annotations
 
@@ -10,7 +12,8 @@ from pathlib import Path
 import pytest
 
 from flexnet_fe.config import load_case
-from flexnet_fe.flight import engagement_map as EM
+from flexnet_fe import engagement_map as EM
+from flexnet_fe.flight.outcome import outcome
 
 CASES = Path(__file__).resolve().parents[2] / "cases"
 
@@ -30,7 +33,7 @@ def test_outcome_row_margins_from_the_shell_and_flight_summaries():
                          "rudder_2": {"peak_von_mises_pa": 1000e6}},           # no allowable: the flight's
                "flight": {"miss_distance_m": 12.0, "hit": False, "wing_damage": 0.1, "rudder_effectiveness": 0.75,
                           "damage_from_shell": {"allowable_pa": {"rudder_2": 500e6, "wing_1": 500e6}}}}
-    row = EM.outcome(summary)
+    row = outcome(summary)
     # margin = allowable/peak − 1: wing_1 +1.0, rudder_2 −0.5 (the critical fin)
     assert row["critical_fin"] == "rudder_2" and row["min_fin_margin"] == pytest.approx(-0.5)
     assert (row["miss_distance_m"], row["hit"]) == (12.0, False)
