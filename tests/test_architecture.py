@@ -14,7 +14,10 @@ Rules (the layers come from the README's "Code layout" table, their one home):
       - the report reads the run directory: it imports no physics package;
       - the run layer never imports the report or the interface;
   (e) every run-directory file name of ``flexnet_fe.runs`` is written there once: no other module
-      spells it as a string literal (it imports the constant).
+      spells it as a string literal (it imports the constant);
+  (f) no function body written twice: two functions whose bodies (docstring aside) are the same
+      syntax tree, beyond a few lines, are one law or loop in two homes. (Copies with renamed
+      variables are the ``duplicates`` tool's to find, see /work/.library; this is the floor.)
 Every import counts, also one inside a function (a lazy import is still an arrow).
 
 Known violations sit in the allowlists below, each with the helper who owns the file; the lead
@@ -71,6 +74,13 @@ FILE_NAME_LITERALS: dict[tuple[str, str], str] = {
     ("flexnet_fe.flight.stage", "sweep.csv"): "flight stage owner: its built-in sweep table is another file "
                                               "of the same name as runs.SWEEP_TABLE; name it in runs.py",
 }
+
+TWIN_FUNCTIONS: dict[frozenset, str] = {
+    frozenset({"flexnet_fe.shell.recovery:shape_q1", "flexnet_fe.shell.transfer:_shape_q1"}):
+        "helper B: one Q1 shape function for recovery and load transfer",
+}
+MIN_TWIN_NODES = 40
+"""Smallest body (AST nodes) counted as a twin: about four lines of arithmetic."""
 
 
 # --------------------------------------------------------------------------- the source tree
@@ -269,3 +279,14 @@ def test_run_directory_file_names_have_one_home():
              for m, tree in TREES.items() if m != RUN_CONTRACT for n in ast.walk(tree)
              if isinstance(n, ast.Constant) and isinstance(n.value, str) and n.value in names}
     _check_allowlist(found, FILE_NAME_LITERALS, "run-directory file names spelled outside flexnet_fe.runs")
+
+
+def test_no_function_body_written_twice():
+    bodies: dict[str, list[str]] = {}
+    for m, q, n in _functions():
+        body = n.body[1:] if ast.get_docstring(n) is not None else n.body
+        tree = ast.Module(body=body, type_ignores=[])
+        if sum(1 for _ in ast.walk(tree)) >= MIN_TWIN_NODES:
+            bodies.setdefault(ast.dump(tree), []).append(f"{m}:{q}")
+    found = {frozenset(v): "the same body in " + ", ".join(sorted(v)) for v in bodies.values() if len(v) > 1}
+    _check_allowlist(found, TWIN_FUNCTIONS, "functions written twice (keep one, import it)")
