@@ -22,6 +22,8 @@ import shutil
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import numpy as np
+
 from flexnet_fe.errors import CaseError
 
 MAX_STEPS = 1e9
@@ -91,15 +93,19 @@ def check_net(net, file) -> tuple[float, float, float, float]:
     if net.mesh_size > span:
         raise CaseError(file, "net.mesh_size", f"{net.mesh_size:g} m is larger than {span_field} = {span:g} m "
                         "(the net would have no mesh cell)")
-    # the net builders' own formulas (their one home), so the check sees the numbers the run will use
+    # the net builders' and the collide crop's own formulas (their one home): the numbers the run will use
+    from flexnet_fe.collide.crop import wave_speed
     from flexnet_fe.net.topology import rope_area, segment_stiffness
 
-    area = _finite(file, "net.rope_diameter", "rope cross-section π d²/4 [m²]", float(rope_area(net.rope_diameter)))
-    _finite(file, "net.density", "rope mass per length ρA [kg/m]", net.density * area)
-    ea = _finite(file, "net.youngs_modulus", "rope axial stiffness EA [N]", net.youngs_modulus * area)
-    c = _finite(file, "net.youngs_modulus", "rope wave speed √(E/ρ) [m/s]", math.sqrt(net.youngs_modulus / net.density))
-    nodes, segs, l0 = net_counts(net)
-    _finite(file, "net.mesh_size", "segment stiffness EA/l0 [N/m]", float(segment_stiffness(ea, l0)))
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # an overflow is reported below
+        d = np.float64(net.rope_diameter)  # numpy floats overflow to inf (a Python float's ** raises)
+        area = _finite(file, "net.rope_diameter", "rope cross-section π d²/4 [m²]", float(rope_area(d)))
+        _finite(file, "net.density", "rope mass per length ρA [kg/m]", net.density * area)
+        ea = _finite(file, "net.youngs_modulus", "rope axial stiffness EA [N]", float(np.float64(net.youngs_modulus) * area))
+        c = _finite(file, "net.youngs_modulus", "rope wave speed √(E/ρ) [m/s]",
+                    wave_speed(net.youngs_modulus, net.density))
+        nodes, segs, l0 = net_counts(net)
+        _finite(file, "net.mesh_size", "segment stiffness EA/l0 [N/m]", float(segment_stiffness(np.float64(ea), l0)))
     return nodes, segs, l0, c
 
 
