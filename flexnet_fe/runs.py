@@ -14,6 +14,8 @@ Every file name the run machinery writes or reads is named here once::
                                 missile.pvd snapshots (read by the report)
     <run>/shell/<fin>/fields.xdmf, envelope.xdmf  stress frames; peak envelope (read by flight
                                 damage and the report)
+    <run>/shell/meshes/<fin>.msh, body.msh  the Gmsh meshes of the case's missile (read by the
+                                report)
     <run>/report.html           the report
 
 Stages and readers import these names (``HISTORY``, ``NET_STATE``, ``FIN_CONTACTS``,
@@ -64,6 +66,10 @@ FIELDS_XDMF = "fields.xdmf"
 """shell/<fin>/: recovered stress frames."""
 ENVELOPE_XDMF = "envelope.xdmf"
 """shell/<fin>/: peak-over-time stresses, read by flight damage and the report."""
+SHELL_MESHES = "meshes"
+"""shell/: the Gmsh meshes the stage solved on (``missile.mesh.write_meshes``: ``<fin>.msh``, body.msh)."""
+BODY_MSH = "body.msh"
+"""shell/meshes/: the missile body's surface mesh, read by the report's ParaView file."""
 SWEEP_TABLE = "sweep.csv"
 BATCH_TABLE = "batch.csv"
 MAP_TABLE = "map.csv"

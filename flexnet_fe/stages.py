@@ -12,7 +12,7 @@ from dataclasses import dataclass
 from enum import Enum
 from typing import Any, Callable
 
-from flexnet_fe.runs import FIN_CONTACTS, HISTORY, StageContext
+from flexnet_fe.runs import FIN_CONTACTS, HISTORY, SHELL_MESHES, StageContext
 
 
 class Stage(str, Enum):
@@ -59,7 +59,7 @@ def shell(ctx: StageContext) -> dict:
 
     c, comm = ctx.case, ctx.comm or MPI.COMM_WORLD
     # Meshes are rebuilt from the case's own missile table (0.3–1.5 s), never taken stale from meshes/.
-    mesh_paths = write_meshes(c.missile, ctx.stage_dir / "meshes") if comm.rank == 0 else None
+    mesh_paths = write_meshes(c.missile, ctx.stage_dir / SHELL_MESHES) if comm.rank == 0 else None
     mesh_paths = comm.bcast(mesh_paths, root=0)
     fins = fin_specs(build_missile(c.missile).fins, mesh_paths)
     collide_dir = ctx.stage_output("collide")

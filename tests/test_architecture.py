@@ -71,6 +71,7 @@ UPWARD_IMPORTS: dict[tuple[str, str], str] = {
 
 FILE_NAME_LITERALS: dict[tuple[str, str], str] = {
     ("flexnet_fe.collide.stage", "missile.pvd"): "helper A: use runs.MISSILE_PVD",
+    ("flexnet_fe.missile.mesh", "body.msh"): "missile/mesh.py owner (lead): use runs.BODY_MSH",
     ("flexnet_fe.flight.stage", "sweep.csv"): "flight stage owner: its built-in sweep table is another file "
                                               "of the same name as runs.SWEEP_TABLE; name it in runs.py",
 }

@@ -37,7 +37,7 @@ import numpy as np
 
 from flexnet_fe.errors import FlexnetError
 from flexnet_fe.xdmf import list_fields, nearest_time_index, read_field, read_mesh
-from flexnet_fe.runs import ENVELOPE_XDMF, FIELDS_XDMF
+from flexnet_fe.runs import BODY_MSH, ENVELOPE_XDMF, FIELDS_XDMF, SHELL_MESHES
 
 MERGE_FRACTION = 0.5
 """Output times of different fins closer than this fraction of the smallest median output
@@ -222,7 +222,7 @@ def write_missile_files(shell_dir: Path, fins: list[str], out_dir: Path, notes: 
     if not read:
         raise FlexnetError(f"{shell_dir}: no fin fields.xdmf readable: no missile file")
     try:
-        body = read_body(shell_dir / "meshes" / "body.msh")
+        body = read_body(shell_dir / SHELL_MESHES / BODY_MSH)
     except (FlexnetError, ValueError, OSError) as err:
         notes.append(f"ParaView missile file: no body ({err})")
         body = None
