@@ -32,6 +32,7 @@ import shutil
 import signal
 import sys
 import time
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
@@ -228,6 +229,20 @@ def run_case(case: Case, case_dir: Path, run_dir: Path, stages: list[Stage] | No
     return summary
 
 
+@dataclass(frozen=True)
+class _Run:
+    """One locked run on rank 0: the case, its folders, status.json, the summary being written
+    (``summary`` is updated in place), the stages' input hashes and the communicator (or None)."""
+
+    case: Case
+    case_dir: Path
+    run_dir: Path
+    status: Status
+    summary: dict
+    hashes: dict
+    comm: object | None
+
+
 def _run_locked(case, case_dir, run_dir, wanted, funcs, versions, comm, skip_done: bool) -> dict:
     hashes = stage_hashes(case)
     atomic_write_json(run_dir / RESOLVED, {
@@ -238,39 +253,41 @@ def _run_locked(case, case_dir, run_dir, wanted, funcs, versions, comm, skip_don
     summary = read_json(summary_path) if summary_path.is_file() else {}
     summary = {k: v for k, v in summary.items() if status.data["stages"].get(k, {}).get("state") == "done"}
     _check_upstream(case, wanted, status, run_dir)
+    run = _Run(case, case_dir, run_dir, status, summary, hashes, comm)
     for stage in wanted:
         if skip_done and status.state(stage) == "done":
             LOG.info("stage %s: up to date (done %s), skipped; --force re-runs it", stage.value,
                      status.record(stage).get("finished", "earlier"))
             continue
-        _run_stage(stage, case, case_dir, run_dir, funcs[stage], status, summary, hashes, comm)
-    return summary
+        _run_stage(run, stage, funcs[stage])
+    return run.summary
 
 
-def _run_stage(stage, case, case_dir, run_dir, func, status, summary, hashes, comm) -> dict:
+def _run_stage(run: _Run, stage: Stage, func: Callable[[StageContext], dict]) -> dict:
+    status, summary, comm = run.status, run.summary, run.comm
     distributed = comm is not None and comm.size > 1 and REGISTRY[stage].distributed
-    part = partial_dir(run_dir, stage.value)
+    part = partial_dir(run.run_dir, stage.value)
     if part.exists():
         shutil.rmtree(part)
     part.mkdir()
     summary.pop(stage.value, None)
     started, t0, log, handler = now(), time.perf_counter(), None, None
     try:  # from here on, any end (signal included) is recorded
-        status.set(stage, state="running", started=started, input_hash=hashes[stage], **me())
-        _prune_summary(run_dir, status, summary)
+        status.set(stage, state="running", started=started, input_hash=run.hashes[stage], **me())
+        _prune_summary(run)
         log, handler = _stage_logger(part, stage)
-        LOG.info("stage %s: running → %s", stage.value, stage_dir(run_dir, stage.value))
+        LOG.info("stage %s: running → %s", stage.value, stage_dir(run.run_dir, stage.value))
         if distributed:
             _send(comm, STAGE_ORDER.index(stage))
-        section = func(StageContext(case, case_dir, run_dir, part, log, comm))
+        section = func(StageContext(run.case, run.case_dir, run.run_dir, part, log, comm))
         log.removeHandler(handler)
         handler.close()
         handler = None
-        publish_stage(run_dir, stage.value)
+        publish_stage(run.run_dir, stage.value)
         summary[stage.value] = section
-        atomic_write_json(run_dir / SUMMARY, summary)
+        atomic_write_json(run.run_dir / SUMMARY, summary)
         wall = time.perf_counter() - t0
-        status.set(stage, state="done", started=started, finished=now(), input_hash=hashes[stage], wall_s=wall,
+        status.set(stage, state="done", started=started, finished=now(), input_hash=run.hashes[stage], wall_s=wall,
                    **me())
     except BaseException as err:
         if isinstance(err, KeyboardInterrupt):
@@ -279,11 +296,11 @@ def _run_stage(stage, case, case_dir, run_dir, func, status, summary, hashes, co
         if handler is not None:
             log.removeHandler(handler)
             handler.close()
-        _record_end(stage, err, run_dir, status, started, hashes, time.perf_counter() - t0)
-        _prune_summary(run_dir, status, summary)
+        _record_end(run, stage, err, started, time.perf_counter() - t0)
+        _prune_summary(run)
         if distributed:
             comm.Abort(getattr(err, "exit_code", 1))  # the other ranks may sit in a collective
-        shown = _translate(stage, err, run_dir, status)
+        shown = _translate(run, stage, err)
         if shown is err:
             raise
         raise shown from None
@@ -291,16 +308,18 @@ def _run_stage(stage, case, case_dir, run_dir, func, status, summary, hashes, co
     return section
 
 
-def _prune_summary(run_dir: Path, status: Status, summary: dict) -> None:
+def _prune_summary(run: _Run) -> None:
     """summary.json keeps the sections of done stages only (a stale section is removed)."""
-    for name in [k for k in summary if status.data["stages"].get(k, {}).get("state") != "done"]:
+    summary = run.summary
+    for name in [k for k in summary if run.status.data["stages"].get(k, {}).get("state") != "done"]:
         del summary[name]
-    atomic_write_json(run_dir / SUMMARY, summary)
+    atomic_write_json(run.run_dir / SUMMARY, summary)
 
 
-def _record_end(stage, err, run_dir, status, started, hashes, wall) -> None:
+def _record_end(run: _Run, stage: Stage, err: BaseException, started: str, wall: float) -> None:
     """Record a stage that ended with ``err`` in status.json and put its partial files in place."""
-    base = {"started": started, "finished": now(), "input_hash": hashes[stage], "wall_s": wall, **me()}
+    run_dir, status = run.run_dir, run.status
+    base = {"started": started, "finished": now(), "input_hash": run.hashes[stage], "wall_s": wall, **me()}
     if isinstance(err, OSError) and err.errno in IO_ERRNOS:
         # Free what the stage wrote (a full disk must have room for status.json).
         shutil.rmtree(partial_dir(run_dir, stage.value), ignore_errors=True)
@@ -316,8 +335,9 @@ def _record_end(stage, err, run_dir, status, started, hashes, wall) -> None:
     status.set(stage, state="failed", error=str(err) or type(err).__name__, **base)
 
 
-def _translate(stage, err, run_dir, status) -> BaseException:
+def _translate(run: _Run, stage: Stage, err: BaseException) -> BaseException:
     """The exception the caller sees for a stage that ended with ``err``."""
+    run_dir, status = run.run_dir, run.status
     if isinstance(err, OSError) and err.errno in IO_ERRNOS:
         return RunIOError(err, f"running stage {stage.value}", str(stage_dir(run_dir, stage.value)))
     if isinstance(err, KeyboardInterrupt):
