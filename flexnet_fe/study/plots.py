@@ -57,12 +57,12 @@ def accuracy_chart(stage: str, rows: list[dict], path: Path, title: str) -> None
         ax.scatter(cost[front], err[front], s=260, facecolors="none", edgecolors="0.4", lw=1.2,
                    label="on the Pareto front (CPU ±15 %, errors < 0.01 % equal)")
         ax.axhspan(ERR_FLOOR / 2, ERR_RESOLUTION, color="0.9", zorder=0, label="error < 0.01 % (not resolved)")
-        for r, c, e in zip(ok, cost, err):
+        for k, (r, c, e) in enumerate(zip(ok, cost, err)):
             style = (dict(marker="*", s=220, color="tab:red", zorder=5, label="shipped default")
                      if r["is_default"] else dict(marker="s", s=60, color="k", zorder=4, label="reference")
                      if r["is_reference"] else dict(marker="o", s=36, color="tab:blue", zorder=3, label="variant"))
             ax.scatter([c], [e], **style)
-            ax.annotate(_label(r), (c, e), textcoords="offset points", xytext=(4, 4), fontsize=7)
+            ax.annotate(_label(r), (c, e), textcoords="offset points", xytext=(4, 4 - 9 * (k % 4)), fontsize=7)
         ax.axhline(HEADLINE_TOLERANCE, color="tab:orange", ls="--", lw=1, label="2 % bar")
         ax.set_xscale("log")
         ax.set_yscale("log")

@@ -58,7 +58,10 @@ def run_point(p: Point, ctx: Context, fin_name: str, loads_dir: Path | None) -> 
     extra = QUICK_LOAD if ctx.quick else ()
     case = case_with(CASE, extra + ("shell.fins='named'", f"shell.fin_names=['{fin_name}']") + p.overrides)
     mesh = fin_mesh(case.missile, fin_name, ctx.scratch("shell_mesh"))
-    fins = fin_specs([f for f in build_missile(case.missile).fins if f.name == fin_name], {fin_name: mesh})
+    # run_shell checks every fin named in fin_contacts.npz against the specs; only the named fin
+    # is meshed and solved (select_fins), so the others share its mesh path, never read.
+    all_fins = build_missile(case.missile).fins
+    fins = fin_specs(all_fins, {f.name: mesh for f in all_fins})
     npz = loads_dir / FIN_CONTACTS if loads_dir else None
     hist = loads_dir / HISTORY if loads_dir else None
     s = run_shell(case.shell, fins, npz, hist, ctx.scratch("shell_point"), LOG)

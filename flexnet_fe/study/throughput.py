@@ -13,9 +13,11 @@ from flexnet_fe.study.common import Context, loglog_slope
 
 LOG = logging.getLogger("flexnet.study.throughput")
 
-SIZE_KNOBS = {"deploy": "net.subdivisions", "collide": "net.subdivisions", "shell": "missile.mesh_size",
-              "flight": "flight.dt"}
-"""The knob whose variants change each stage's problem size (nodes, segments, DOFs, steps)."""
+SIZE_KNOBS = {"deploy": ("net.subdivisions",),
+              "collide": ("net.subdivisions", "collide.crop", "collide.crop_wave_speed_factor"),
+              "shell": ("missile.mesh_size",), "flight": ("flight.dt",)}
+"""The knobs whose variants change each stage's problem size (deploy nodes, collide active
+segments, shell DOFs, flight steps)."""
 
 
 def net_kernel(ctx: Context) -> list[dict]:
@@ -46,13 +48,14 @@ def slopes(stage_rows: list[dict]) -> list[dict]:
     """Per stage: slope of log(CPU) and of log(CPU per step) against log(size) over the default
     and its size-knob variants (size: deploy nodes, collide active segments, shell DOFs, flight steps)."""
     out = []
-    for stage, knob in SIZE_KNOBS.items():
+    for stage, knobs in SIZE_KNOBS.items():
         pts = [r for r in stage_rows if r["stage"] == stage and r["status"] == "ok"
-               and (r["is_default"] or r["knob"] == knob) and r.get("size")]
+               and (r["is_default"] or r["knob"] in knobs) and r.get("size")]
         if len(pts) < 2:
             continue
         size = [r["size"] for r in pts]
-        out.append({"kind": "scaling", "stage": stage, "size_knob": knob, "points": len(pts),
+        used = sorted({r["knob"] for r in pts if not r["is_default"]})
+        out.append({"kind": "scaling", "stage": stage, "size_knob": ", ".join(used), "points": len(pts),
                     "size_min": min(size), "size_max": max(size),
                     "slope_cpu": loglog_slope(size, [r["cpu_s"] for r in pts]),
                     "slope_cpu_per_step": loglog_slope(size, [r["cpu_s"] / r["steps"] for r in pts])})
