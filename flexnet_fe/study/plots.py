@@ -22,11 +22,11 @@ UNITS = {"max_area_m2": "max area", "time_to_max_area_s": "time of max area", "d
          "peak_von_mises_pa": "peak fin von Mises", "miss_distance_m": "miss distance"}
 
 
-def _plain(ax) -> None:
+def _plain(ax, which: str = "xy") -> None:
     """Log axes with plain tick labels (0.5, 1, 2 rather than 5×10⁻¹)."""
     from matplotlib.ticker import NullFormatter, ScalarFormatter
 
-    for axis in (ax.xaxis, ax.yaxis):
+    for axis in [a for n, a in (("x", ax.xaxis), ("y", ax.yaxis)) if n in which]:
         if axis.get_scale() == "log":
             f = ScalarFormatter()
             f.set_scientific(True)
@@ -46,7 +46,9 @@ def _label(r: dict) -> str:
 def accuracy_chart(stage: str, rows: list[dict], path: Path, title: str) -> None:
     """One panel per headline: relative error vs CPU time [s], log-log."""
     cols = [k for k in rows[0] if k.startswith("err_")]
-    fig, axes = plt.subplots(1, len(cols), figsize=(5.2 * len(cols), 4.4), squeeze=False)
+    wide = len(cols) > 1
+    fig, axes = plt.subplots(1, len(cols), figsize=(5.2 * len(cols) if wide else 8.0, 4.6 if wide else 5.4),
+                             squeeze=False)
     ok = [r for r in rows if r["status"] == "ok"]
     cost = np.array([r["cpu_s"] for r in ok], dtype=float)
     for ax, col in zip(axes[0], cols):
@@ -66,14 +68,15 @@ def accuracy_chart(stage: str, rows: list[dict], path: Path, title: str) -> None
         ax.axhline(HEADLINE_TOLERANCE, color="tab:orange", ls="--", lw=1, label="2 % bar")
         ax.set_xscale("log")
         ax.set_yscale("log")
+        _plain(ax, "x")
         ax.set_xlabel("CPU time of the stage [s]")
         ax.set_ylabel(f"relative error of {UNITS.get(col[4:], col[4:])} [-]")
         ax.grid(True, which="both", alpha=0.3)
     h, lab = axes[0][0].get_legend_handles_labels()
     uniq = dict(zip(lab, h))
-    fig.legend(uniq.values(), uniq.keys(), fontsize=8, loc="lower center", ncol=6, frameon=False)
+    fig.legend(uniq.values(), uniq.keys(), fontsize=8, loc="lower center", ncol=6 if wide else 3, frameon=False)
     fig.suptitle(f"{title} (errors of 0 drawn at {ERR_FLOOR:g})", fontsize=10)
-    fig.tight_layout(rect=(0, 0.08, 1, 1))
+    fig.tight_layout(rect=(0, 0.09 if wide else 0.13, 1, 1))
     fig.savefig(path, dpi=110)
     plt.close(fig)
 
@@ -113,7 +116,7 @@ def dt_map_chart(rows: list[dict], path: Path) -> None:
             ax.axvline(1.0, color="0.5", ls=":", lw=1)
             ax.set_xlabel("dt / dt_crit [-]")
             ax.set_ylabel("energy growth max(E)/E_ref [-] (stopped: drawn at top)")
-        _plain(ax)
+        _plain(ax, "x")
         ax.set_title({"net": "net (deploy, forced dt)", "collide": "collision (dt_scale)",
                       "shell": "shell (plate, dt = r·dt_crit)"}[m], fontsize=10)
         ax.grid(True, which="both", alpha=0.3)
@@ -148,7 +151,7 @@ def contact_chart(rows: list[dict], path: Path) -> None:
         ax.set_yscale("log")
         ax.set_xlabel("impact speed [m/s]")
         ax.set_ylabel("contact stiffness K [N/m^1.5]")
-        _plain(ax)
+        _plain(ax, "x")
         ax.set_title(f"travel per step = {f:g} × min(r, h/2); label = penetration / (r + h/2)", fontsize=9)
         ax.grid(True, which="both", alpha=0.3)
         h, lab = ax.get_legend_handles_labels()
