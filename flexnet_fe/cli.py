@@ -190,6 +190,33 @@ def cmd_schema(args) -> int:
     return 0
 
 
+def cmd_study(args) -> int:
+    from flexnet_fe.study.run import run_study
+
+    page = run_study(args.study, Path(args.out), args.quick, Path(args.run_dir) if args.run_dir else None)
+    print(f"study {args.study}: done → {page}")
+    return 0
+
+
+def _add_study_parser(sub) -> None:
+    """The `flexnet study` subcommand (issue 15)."""
+    sp = sub.add_parser("study", help="accuracy against cost, stability maps, simplifications and throughput, "
+                                      "measured on this machine; writes CSV, PNG and README.md",
+                        description="Run a study and write <study>.csv, <study>.json, PNG charts and README.md "
+                                    "(rebuilt from every study in the folder) into --out. Studies: deploy, collide, "
+                                    "shell, flight (error against an in-run fine reference vs CPU time, Pareto "
+                                    "front, shipped default), stability (dt/dt_crit, contact stiffness x dt x "
+                                    "speed, damping models), simplify (with/without each simplification, from the "
+                                    "stage studies in --out), throughput (kernel speed, scaling, end-to-end time).")
+    sp.add_argument("study", choices=("all", "deploy", "collide", "shell", "flight", "stability", "simplify",
+                                      "throughput"), help="one study, or all of them in order")
+    sp.add_argument("--quick", action="store_true", help="reduced scenes and fewer points (about a minute; CI)")
+    sp.add_argument("--out", default="docs/study", help="output folder (default docs/study)")
+    sp.add_argument("--run-dir", help="throughput: take the end-to-end stage times from this run directory "
+                                      "(default: the full study runs cases/radar_traction itself)")
+    sp.set_defaults(func=cmd_study)
+
+
 def build_parser() -> argparse.ArgumentParser:
     from flexnet_fe import __version__
 
@@ -261,6 +288,8 @@ def build_parser() -> argparse.ArgumentParser:
     sp.add_argument("--sweep", action="store_true", help="TARGET is a sweep or batch table")
     sp.add_argument("--param", action="append", metavar="KEY", help="swept parameter columns (default: detected)")
     sp.set_defaults(func=cmd_report)
+
+    _add_study_parser(sub)
 
     sp = sub.add_parser("schema", help="list every case-file field with its unit, default and meaning")
     sp.add_argument("table", nargs="?", help="one table, e.g. net, collide, missile.material (default: all)")
