@@ -46,15 +46,16 @@ def spring_force(d0, d1, d2, w0, w1, w2, extra, rest_length, stiffness, damping,
     length |d| [m], length rate l̇ [m/s], stretch l − (l0 − offset) [m]); the force on node i is
     +T u, on node j −T u. A zero-length segment returns T = 0 and u = 0."""
     lf = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-    if lf == 0.0:
-        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, extra - (rest_length - offset)
-    u0 = d0 / lf
-    u1 = d1 / lf
-    u2 = d2 / lf
+    inv = 1.0 / lf if lf > 0.0 else 0.0
+    u0 = d0 * inv
+    u1 = d1 * inv
+    u2 = d2 * inv
     ldot = w0 * u0 + w1 * u1 + w2 * u2
-    ln = lf + extra
-    return (rope_tension(ln, rest_length, stiffness, damping, offset, ldot), u0, u1, u2, lf, ldot,
-            ln - (rest_length - offset))
+    stretch = lf + extra - (rest_length - offset)
+    # rope_tension's law, written with selects (no branch in the caller's loop)
+    t = stiffness * stretch + damping * ldot
+    t = max(t, 0.0) if stretch > 0.0 and lf > 0.0 else 0.0
+    return t, u0, u1, u2, lf, ldot, stretch
 
 
 @njit(cache=True)

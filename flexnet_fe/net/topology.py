@@ -9,6 +9,7 @@ the mass of every segment it ends (plus any concentrated mass: corner, tip, hub)
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -94,10 +95,20 @@ class NetModel:
     def n_springs(self) -> int:
         return len(self.springs)
 
-    @property
+    @cached_property
     def stiffness(self) -> np.ndarray:
         """Segment stiffness K = EA / l0 [N/m], shape (m,), Eq. (3)."""
         return segment_stiffness(self.stiffness_ea, self.rest_length)
+
+    @cached_property
+    def kernel_springs(self) -> np.ndarray:
+        """``springs`` as uint32 (m, 2), the deploy kernel's index type (computed once)."""
+        return self.springs.astype(np.uint32)
+
+    @cached_property
+    def links(self) -> np.ndarray:
+        """Indices of the hub links, shape (k,), int64 (computed once)."""
+        return np.flatnonzero(self.hub_link)
 
 
 def segment_stiffness(ea: np.ndarray, rest: np.ndarray) -> np.ndarray:
