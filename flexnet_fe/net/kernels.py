@@ -67,24 +67,22 @@ class DeployState(NamedTuple):
 
 
 @njit(cache=True, inline="always")
-def _segment_air(model, v, s, i, j, u0, u1, u2, lf, vi0, vi1, vi2, f, lam):
-    """Rope aerodynamics of segment s, Eq. (5)–(10): half of its force on each end i, j (the
-    hub's half acts on its translation only); adds the drag's velocity-derivative bound
-    ½ ρ C_max d l |v_s| [kg/s] to lam[i], lam[j]. (vi0, vi1, vi2) velocity of end i [m/s]."""
+def _segment_air(model, v, s, ends, u, lf, vi, lam):
+    """Rope aerodynamics of segment s, Eq. (5)–(10). Returns half its force [N] (3 floats), the
+    share of each end (i, j) = ``ends`` (the hub's half acts on its translation only); adds the
+    drag's velocity-derivative bound ½ ρ C_max d l |v_s| [kg/s] to lam[i], lam[j] (lam (n,)).
+    u unit vector i → j, lf straight length [m] (> 0), vi velocity of end i [m/s] (3 floats)."""
+    i, j = ends
     wind = model.wind
-    rho = model.rho
-    vrx = 0.5 * (vi0 + v[j, 0]) - wind[0]
-    vry = 0.5 * (vi1 + v[j, 1]) - wind[1]
-    vrz = 0.5 * (vi2 + v[j, 2]) - wind[2]
-    fx, fy, fz = segment_aero_force(u0, u1, u2, lf, vrx, vry, vrz, rho, model.diameter[s])
-    f[i, 0] += 0.5 * fx; f[i, 1] += 0.5 * fy; f[i, 2] += 0.5 * fz
-    f[j, 0] += 0.5 * fx; f[j, 1] += 0.5 * fy; f[j, 2] += 0.5 * fz
-    q = 0.5 * rho * C_MAX * model.diameter[s] * lf * math.sqrt(vrx * vrx + vry * vry + vrz * vrz)
+    vrel = (0.5 * (vi[0] + v[j, 0]) - wind[0], 0.5 * (vi[1] + v[j, 1]) - wind[1], 0.5 * (vi[2] + v[j, 2]) - wind[2])
+    fx, fy, fz, vm = segment_aero_force(u, lf, vrel, model.rho, model.diameter[s])
+    q = 0.5 * model.rho * C_MAX * model.diameter[s] * lf * vm
     lam[i] += q
     lam[j] += q
+    return 0.5 * fx, 0.5 * fy, 0.5 * fz
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _rope_forces(model, state, f, lam):
     """Adds the tensions (Eq. 1–4) and, with air, the aerodynamics (Eq. 5–10) of every segment
     that is not a hub link to f (n, 3) [N]; writes their tension (m,) [N]. Returns the largest.
@@ -108,18 +106,20 @@ def _rope_forces(model, state, f, lam):
         i = springs[s, 0]
         j = springs[s, 1]
         t, u0, u1, u2, lf, ldot, stretch = spring_force(
-            x[j, 0] - x[i, 0], x[j, 1] - x[i, 1], x[j, 2] - x[i, 2], v[j, 0] - v[i, 0], v[j, 1] - v[i, 1],
-            v[j, 2] - v[i, 2], 0.0, rest[s], stiffness[s], damping[s], offset[s])
+            (x[j, 0] - x[i, 0], x[j, 1] - x[i, 1], x[j, 2] - x[i, 2]),
+            (v[j, 0] - v[i, 0], v[j, 1] - v[i, 1], v[j, 2] - v[i, 2]), 0.0,
+            (rest[s], stiffness[s], damping[s], offset[s]))
         tension[s] = t
         tmax = max(tmax, t)
-        f[i, 0] += t * u0; f[i, 1] += t * u1; f[i, 2] += t * u2
-        f[j, 0] -= t * u0; f[j, 1] -= t * u1; f[j, 2] -= t * u2
+        a0 = a1 = a2 = 0.0
         if air and lf != 0.0:
-            _segment_air(model, v, s, i, j, u0, u1, u2, lf, v[i, 0], v[i, 1], v[i, 2], f, lam)
+            a0, a1, a2 = _segment_air(model, v, s, (i, j), (u0, u1, u2), lf, (v[i, 0], v[i, 1], v[i, 2]), lam)
+        f[i, 0] += t * u0 + a0; f[i, 1] += t * u1 + a1; f[i, 2] += t * u2 + a2
+        f[j, 0] += a0 - t * u0; f[j, 1] += a1 - t * u1; f[j, 2] += a2 - t * u2
     return tmax
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _hub_link_forces(model, state, f, lam):
     """Adds the forces of the hub links (Eq. 12–19: rim point, wrap, tension, air) to f (n, 3)
     [N]; updates their wrap (m,) [rad] and tension (m,) [N]. Returns (torque about +z on the
@@ -127,21 +127,17 @@ def _hub_link_forces(model, state, f, lam):
     x = state.x
     v = state.v
     hub = model.hub
-    theta = state.hub[0]
-    omega = state.hub[1]
     torque = 0.0
     tmax = 0.0
     pt = np.empty(3)
     vt = np.empty(3)
     for s in model.links:
         j = model.springs[s, 1]
-        gamma, w = hub_link_state(x, v, hub, j, theta, omega, model.anchor[s], model.r0, model.half_length,
-                                  state.wrap[s], pt, vt)
+        gamma, w = hub_link_state(model, state, s, pt, vt)
         state.wrap[s] = w
         t, u0, u1, u2, lf, ldot, stretch = spring_force(
-            x[j, 0] - pt[0], x[j, 1] - pt[1], x[j, 2] - pt[2], v[j, 0] - vt[0], v[j, 1] - vt[1],
-            v[j, 2] - vt[2], model.r0 * abs(w), model.rest[s], model.stiffness[s], model.damping[s],
-            model.offset[s])
+            (x[j, 0] - pt[0], x[j, 1] - pt[1], x[j, 2] - pt[2]), (v[j, 0] - vt[0], v[j, 1] - vt[1], v[j, 2] - vt[2]),
+            model.r0 * abs(w), (model.rest[s], model.stiffness[s], model.damping[s], model.offset[s]))
         state.tension[s] = t
         tmax = max(tmax, t)
         f[hub, 0] += t * u0; f[hub, 1] += t * u1; f[hub, 2] += t * u2
@@ -149,7 +145,9 @@ def _hub_link_forces(model, state, f, lam):
         # lever arm of the rim point: (T - c) x (t u), z component (Eq. 12-13)
         torque += t * ((pt[0] - x[hub, 0]) * u1 - (pt[1] - x[hub, 1]) * u0)
         if model.air and lf != 0.0:
-            _segment_air(model, v, s, hub, j, u0, u1, u2, lf, vt[0], vt[1], vt[2], f, lam)
+            a0, a1, a2 = _segment_air(model, v, s, (hub, j), (u0, u1, u2), lf, (vt[0], vt[1], vt[2]), lam)
+            f[hub, 0] += a0; f[hub, 1] += a1; f[hub, 2] += a2
+            f[j, 0] += a0; f[j, 1] += a1; f[j, 2] += a2
     return torque, tmax
 
 
@@ -178,7 +176,7 @@ def net_forces(model, state, f, lam):
     return torque, max(tmax, tlink)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def advance(model, state, n_steps, dt):
     """Advance ``state`` (DeployState) of ``model`` (DeployModel) ``n_steps`` steps of ``dt``
     [s] in place (symplectic Euler); ``state.tension`` holds the tensions of the last force
