@@ -182,8 +182,9 @@ def _fan(ring: list[int]) -> list[tuple[int, int, int]]:
     return [(ring[0], ring[q], ring[q + 1]) for q in range(1, len(ring) - 1)]
 
 
-def _traction_bars(nk: int, kid: np.ndarray, nodes: _Nodes, knots: np.ndarray):
-    """Springs (list of pairs) and the node chain of every mesh bar keyed by its knot pair."""
+def _traction_bars(nk: int, kid: list, nodes: _Nodes, knots: np.ndarray):
+    """Springs (list of pairs) and the node chain of every mesh bar keyed by its knot pair;
+    ``kid`` the knot ids as nested lists (Python ints: fast dict keys)."""
     springs, bar_nodes = [], {}
 
     def add_bar(a, b):
@@ -193,28 +194,28 @@ def _traction_bars(nk: int, kid: np.ndarray, nodes: _Nodes, knots: np.ndarray):
 
     for i in range(nk):
         for j in range(nk - 1):
-            add_bar(kid[i, j], kid[i, j + 1])
+            add_bar(kid[i][j], kid[i][j + 1])
     for i in range(nk - 1):
         for j in range(nk):
-            add_bar(kid[i, j], kid[i + 1, j])
+            add_bar(kid[i][j], kid[i + 1][j])
     return springs, bar_nodes
 
 
-def _traction_cells_and_loop(nk: int, kid: np.ndarray, bar_nodes: dict):
+def _traction_cells_and_loop(nk: int, kid: list, bar_nodes: dict):
     """Cells (each mesh square the polygon of its subdivided edges, fanned from a corner) and
     the ordered perimeter nodes."""
     tris = []
     for i in range(nk - 1):
         for j in range(nk - 1):
-            ring = (bar_nodes[(kid[i, j], kid[i, j + 1])][:-1]
-                    + bar_nodes[(kid[i, j + 1], kid[i + 1, j + 1])][:-1]
-                    + bar_nodes[(kid[i + 1, j], kid[i + 1, j + 1])][::-1][:-1]
-                    + bar_nodes[(kid[i, j], kid[i + 1, j])][::-1][:-1])
+            ring = (bar_nodes[(kid[i][j], kid[i][j + 1])][:-1]
+                    + bar_nodes[(kid[i][j + 1], kid[i + 1][j + 1])][:-1]
+                    + bar_nodes[(kid[i + 1][j], kid[i + 1][j + 1])][::-1][:-1]
+                    + bar_nodes[(kid[i][j], kid[i + 1][j])][::-1][:-1])
             tris.extend(_fan(ring))
-    loop = (sum((bar_nodes[(kid[0, j], kid[0, j + 1])][:-1] for j in range(nk - 1)), [])
-            + sum((bar_nodes[(kid[i, -1], kid[i + 1, -1])][:-1] for i in range(nk - 1)), [])
-            + sum((bar_nodes[(kid[-1, j], kid[-1, j + 1])][::-1][:-1] for j in reversed(range(nk - 1))), [])
-            + sum((bar_nodes[(kid[i, 0], kid[i + 1, 0])][::-1][:-1] for i in reversed(range(nk - 1))), []))
+    loop = (sum((bar_nodes[(kid[0][j], kid[0][j + 1])][:-1] for j in range(nk - 1)), [])
+            + sum((bar_nodes[(kid[i][-1], kid[i + 1][-1])][:-1] for i in range(nk - 1)), [])
+            + sum((bar_nodes[(kid[-1][j], kid[-1][j + 1])][::-1][:-1] for j in reversed(range(nk - 1))), [])
+            + sum((bar_nodes[(kid[i][0], kid[i + 1][0])][::-1][:-1] for i in reversed(range(nk - 1))), []))
     return np.asarray(tris, dtype=np.int64), np.asarray(loop, dtype=np.int64)
 
 
@@ -234,7 +235,7 @@ def build_traction(cfg: TractionNet) -> NetModel:
     knots = np.column_stack([X.ravel(), Y.ravel(), np.zeros(nk * nk)])
     kid = np.arange(nk * nk).reshape(nk, nk)
     nodes = _Nodes(knots, cfg.subdivisions)
-    springs, bar_nodes = _traction_bars(nk, kid, nodes, knots)
+    springs, bar_nodes = _traction_bars(nk, kid.tolist(), nodes, knots)
     x0 = nodes.coordinates()
     springs = np.asarray(springs, dtype=np.int64)
     n = len(x0)
@@ -249,7 +250,7 @@ def build_traction(cfg: TractionNet) -> NetModel:
     for c in corners:
         sx, sy = np.sign(x0[c, 0]), np.sign(x0[c, 1])
         v0[c] = cfg.corner_speed * np.array([np.cos(e) * sx * np.cos(a), np.cos(e) * sy * np.sin(a), np.sin(e)])
-    cells, loop = _traction_cells_and_loop(nk, kid, bar_nodes)
+    cells, loop = _traction_cells_and_loop(nk, kid.tolist(), bar_nodes)
     drag_free = np.zeros(n, dtype=np.bool_)
     drag_free[corners] = True
     return NetModel(kind="traction", x0=x0, v0=v0, mass=mass, springs=springs, rest_length=rest,
