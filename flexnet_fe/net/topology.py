@@ -97,18 +97,24 @@ class NetModel:
 
     @cached_property
     def stiffness(self) -> np.ndarray:
-        """Segment stiffness K = EA / l0 [N/m], shape (m,), Eq. (3)."""
-        return segment_stiffness(self.stiffness_ea, self.rest_length)
+        """Segment stiffness K = EA / l0 [N/m], shape (m,), Eq. (3) (computed once, read-only)."""
+        return _frozen(segment_stiffness(self.stiffness_ea, self.rest_length))
 
     @cached_property
     def kernel_springs(self) -> np.ndarray:
-        """``springs`` as uint32 (m, 2), the deploy kernel's index type (computed once)."""
-        return self.springs.astype(np.uint32)
+        """``springs`` as uint32 (m, 2), the deploy kernel's index type (computed once, read-only)."""
+        return _frozen(self.springs.astype(np.uint32))
 
     @cached_property
     def links(self) -> np.ndarray:
-        """Indices of the hub links, shape (k,), int64 (computed once)."""
-        return np.flatnonzero(self.hub_link)
+        """Indices of the hub links, shape (k,), int64 (computed once, read-only)."""
+        return _frozen(np.flatnonzero(self.hub_link))
+
+
+def _frozen(a: np.ndarray) -> np.ndarray:
+    """``a`` made read-only (the model's derived arrays are shared by every caller)."""
+    a.setflags(write=False)
+    return a
 
 
 def segment_stiffness(ea: np.ndarray, rest: np.ndarray) -> np.ndarray:
