@@ -3,9 +3,10 @@ Fig. 9 (rotary) — mass speed, rope tension, net area (+ hub spin for the rotar
 the net at eight instants like its Fig. 6 / Fig. 8.
 
 Written for speed (issue 15): one figure and one ``savefig`` per stage, fixed margins (no
-``tight_layout``), and the net shapes drawn as images of rope density (segment midpoints and
-nodes binned on a pixel grid) instead of 20 000 vector lines per panel: at the figure's
-resolution a pixel spans about one mesh cell, so the picture is the same, at ~1/10 the cost.
+``tight_layout``), and the net shapes drawn as images — grey where a pixel holds a node or a
+segment midpoint — instead of 20 000 vector lines per panel: at the figure's resolution a pixel
+spans about one mesh cell, so the picture is the same (white specks: cells stretched beyond a
+pixel), at ~1/10 the cost.
 """
 
 from __future__ import annotations
@@ -60,7 +61,7 @@ def plot_deployment(path: Path, hist: dict[str, np.ndarray], shapes: list[tuple[
         ax.grid(alpha=0.3)
     if shapes:
         lim = max(float(np.abs(xy).max()) for _, xy in shapes) * 1.05
-        low = fig.add_gridspec(2, 4, left=0.06, right=0.99, top=0.58, bottom=0.04, wspace=0.05, hspace=0.18)
+        low = fig.add_gridspec(2, 4, left=0.06, right=0.99, top=0.57, bottom=0.05, wspace=0.05, hspace=0.24)
         for k, (ts, xy) in enumerate(shapes[:8]):
             ax = fig.add_subplot(low[k // 4, k % 4])
             ax.imshow(density_image(xy, springs, lim) > 0, origin="lower", extent=(-lim, lim, -lim, lim),
