@@ -9,7 +9,6 @@ lagged velocity the stability limit is ω dt <= 2 (√(1+ζ²) - ζ) (see ``time
 
 from __future__ import annotations
 
-import math
 from typing import NamedTuple
 
 import numpy as np
