@@ -7,7 +7,8 @@ the central triangles of the rotary net). This is the area the net itself covers
 folds count once, holes where the net is torn open (none here) would not count.
 
 Computed by rasterising the projected cells on a square pixel grid of side ``pixel`` and
-counting covered pixel centres (scanline: one x-interval per triangle and pixel row). The error is bounded by the pixels cut by the outline:
+counting covered pixel centres (scanline: one x-interval per triangle and pixel row). The
+error is bounded by the pixels cut by the outline:
 |error| <= perimeter × pixel / 2 (~0.1 % for a 10 m net at 1 cm); measured in the tests
 against the exact flat-net area.
 

@@ -17,7 +17,8 @@ def production_forces(x, v, springs, rest, k, c, diameter, air=False, wind=(0.0,
     n, m = len(x), len(springs)
     f, t = np.zeros((n, 3)), np.zeros(m)
     model = DeployModel(np.asarray(springs, np.uint32), np.full(m, rest), np.full(m, k), np.full(m, c), np.zeros(m),
-                        np.full(m, diameter), np.zeros(m, np.bool_), np.zeros(0, np.int64), np.zeros(m), np.ones(n), -1, 0.1, 0.01, 1.0, np.zeros(3),
+                        np.full(m, diameter), np.zeros(m, np.bool_), np.zeros(0, np.int64), np.zeros(m), np.ones(n),
+                        -1, 0.1, 0.01, 1.0, np.zeros(3),
                         float(rho), np.asarray(wind, float), air)
     state = DeployState(np.asarray(x, float), np.asarray(v, float), np.zeros(2), np.zeros(m), t)
     net_forces(model, state, f, np.zeros(n))
