@@ -54,9 +54,6 @@ WIDE_KERNELS: dict[str, str] = {
     "flexnet_fe.collide.kernel:_apply_to_node": "helper A (added in 1e91cf6, 9 positional)",
     "flexnet_fe.shell.kernel:node_update": "helper B",
     "flexnet_fe.shell.explicit:_update": "helper B",
-    "flexnet_fe.net.hub:hub_link_state": "helper E",
-    "flexnet_fe.net.forces:spring_force": "helper E",
-    "flexnet_fe.net.forces:segment_aero_force": "helper E",
 }
 
 UPWARD_IMPORTS: dict[tuple[str, str], str] = {

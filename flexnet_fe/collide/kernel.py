@@ -308,8 +308,8 @@ def _rope_forces(model, state, wk, dt):
             continue
         i, j = seg[e, 0], seg[e, 1]
         t, u0, u1, u2, lf, ldot, stretch = spring_force(
-            x[j, 0] - x[i, 0], x[j, 1] - x[i, 1], x[j, 2] - x[i, 2], v[j, 0] - v[i, 0], v[j, 1] - v[i, 1],
-            v[j, 2] - v[i, 2], 0.0, model.rest[e], model.k[e], model.c[e], model.off[e])
+            (x[j, 0] - x[i, 0], x[j, 1] - x[i, 1], x[j, 2] - x[i, 2]), (v[j, 0] - v[i, 0], v[j, 1] - v[i, 1],
+            v[j, 2] - v[i, 2]), 0.0, (model.rest[e], model.k[e], model.c[e], model.off[e]))
         if stretch > model.break_stretch[e]:
             state.alive[e] = False
             state.acc[A_NBROKEN] += 1.0

@@ -13,7 +13,6 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from flexnet_fe.frames import quat_mul
 
 
 @njit(cache=True)
@@ -31,8 +30,12 @@ def euler_rates(omega, inertia, moment):
 
 @njit(cache=True)
 def quat_rate(q, omega):
-    """q̇ = ½ q ⊗ (0, ω), shape (4,) (ω: body rate [rad/s])."""
-    w = np.empty(4)
-    w[0] = 0.0
-    w[1:] = omega
-    return 0.5 * quat_mul(q, w)
+    """q̇ = ½ q ⊗ (0, ω), shape (4,) (ω: body rate [rad/s]); the Hamilton product of
+    ``frames.quat_mul`` with a zero scalar part, written out (one allocation)."""
+    p, r, y = 0.5 * omega[0], 0.5 * omega[1], 0.5 * omega[2]
+    out = np.empty(4)
+    out[0] = -q[1] * p - q[2] * r - q[3] * y
+    out[1] = q[0] * p + q[2] * y - q[3] * r
+    out[2] = q[0] * r - q[1] * y + q[3] * p
+    out[3] = q[0] * y + q[1] * r - q[2] * p
+    return out

@@ -7,7 +7,8 @@ the central triangles of the rotary net). This is the area the net itself covers
 folds count once, holes where the net is torn open (none here) would not count.
 
 Computed by rasterising the projected cells on a square pixel grid of side ``pixel`` and
-counting covered pixel centres. The error is bounded by the pixels cut by the outline:
+counting covered pixel centres (scanline: one x-interval per triangle and pixel row). The
+error is bounded by the pixels cut by the outline:
 |error| <= perimeter × pixel / 2 (~0.1 % for a 10 m net at 1 cm); measured in the tests
 against the exact flat-net area.
 
@@ -25,37 +26,56 @@ from numba import njit
 
 @njit(cache=True)
 def raster_area(xy, cells, pixel):
-    """Area [m^2] of the union of triangles. xy : projected node positions [m], shape (n, 2);
-    cells : triangles, shape (c, 3) int64; pixel : pixel side [m]."""
+    """Area [m^2] of the union of triangles: the pixel centres (square grid of side ``pixel``
+    [m]) covered by at least one triangle, times pixel². xy : projected node positions [m],
+    shape (n, 2); cells : triangles, shape (c, 3) int64.
+
+    Scanline form: a triangle with vertices sorted by y (a lowest, c highest) is cut by the
+    centre line of each pixel row it spans along the segment between its long edge a–c and
+    the short edge a–b (below b) or b–c (above b); the pixel centres on that segment are
+    marked on a byte grid (overlaps count once), then the grid is counted. Cost per triangle
+    ∝ its rows, not its box area."""
     xmin = xy[:, 0].min(); xmax = xy[:, 0].max()
     ymin = xy[:, 1].min(); ymax = xy[:, 1].max()
     nx = int(math.ceil((xmax - xmin) / pixel)) + 1
     ny = int(math.ceil((ymax - ymin) / pixel)) + 1
-    grid = np.zeros((ny, nx), dtype=np.bool_)
-    count = 0
+    grid = np.zeros((ny, nx), dtype=np.uint8)  # 1: centre covered
+    h = 1.0 / pixel
     for c in range(cells.shape[0]):
-        ax = xy[cells[c, 0], 0]; ay = xy[cells[c, 0], 1]
-        bx = xy[cells[c, 1], 0]; by = xy[cells[c, 1], 1]
-        cx = xy[cells[c, 2], 0]; cy = xy[cells[c, 2], 1]
-        det = (bx - ax) * (cy - ay) - (by - ay) * (cx - ax)
-        if det == 0.0:
-            continue
-        i0 = max(0, int(math.floor((min(ax, bx, cx) - xmin) / pixel - 0.5)))
-        i1 = min(nx - 1, int(math.ceil((max(ax, bx, cx) - xmin) / pixel - 0.5)))
-        j0 = max(0, int(math.floor((min(ay, by, cy) - ymin) / pixel - 0.5)))
-        j1 = min(ny - 1, int(math.ceil((max(ay, by, cy) - ymin) / pixel - 0.5)))
+        # vertices in pixel units, sorted by y: (ax, ay) <= (bx, by) <= (cx, cy)
+        ax = (xy[cells[c, 0], 0] - xmin) * h; ay = (xy[cells[c, 0], 1] - ymin) * h
+        bx = (xy[cells[c, 1], 0] - xmin) * h; by = (xy[cells[c, 1], 1] - ymin) * h
+        cx = (xy[cells[c, 2], 0] - xmin) * h; cy = (xy[cells[c, 2], 1] - ymin) * h
+        if (bx - ax) * (cy - ay) - (by - ay) * (cx - ax) == 0.0:
+            continue  # degenerate (zero-area) triangle
+        if ay > by:
+            ax, ay, bx, by = bx, by, ax, ay
+        if by > cy:
+            bx, by, cx, cy = cx, cy, bx, by
+        if ay > by:
+            ax, ay, bx, by = bx, by, ax, ay
+        j0 = max(0, int(math.ceil(ay - 0.5)))
+        j1 = min(ny - 1, int(math.floor(cy - 0.5)))
+        s_ac = (cx - ax) / (cy - ay)  # cy > ay: the triangle is not degenerate
+        s_ab = (bx - ax) / (by - ay) if by > ay else 0.0
+        s_bc = (cx - bx) / (cy - by) if cy > by else 0.0
         for j in range(j0, j1 + 1):
-            py = ymin + (j + 0.5) * pixel
-            for i in range(i0, i1 + 1):
-                if grid[j, i]:
-                    continue
-                px = xmin + (i + 0.5) * pixel
-                w0 = ((bx - px) * (cy - py) - (by - py) * (cx - px)) / det
-                w1 = ((cx - px) * (ay - py) - (cy - py) * (ax - px)) / det
-                w2 = 1.0 - w0 - w1
-                if w0 >= 0.0 and w1 >= 0.0 and w2 >= 0.0:
-                    grid[j, i] = True
-                    count += 1
+            py = j + 0.5
+            x1 = ax + (py - ay) * s_ac
+            x2 = ax + (py - ay) * s_ab if py < by else bx + (py - by) * s_bc
+            if by == ay and py <= by:  # flat bottom edge on this line
+                x2 = bx
+            lo = min(x1, x2)
+            hi = max(x1, x2)
+            i0 = max(0, int(math.ceil(lo - 0.5)))
+            i1 = min(nx - 1, int(math.floor(hi - 0.5)))
+            grid[j, i0:i1 + 1] = 1  # a memset
+    count = 0
+    for j in range(ny):
+        row = 0
+        for i in range(nx):
+            row += grid[j, i]
+        count += row
     return count * pixel * pixel
 
 

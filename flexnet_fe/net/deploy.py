@@ -5,8 +5,8 @@ kernel one output interval per call, and writes into ``stage_dir``:
 
 - ``history.csv``: one row per output time (float64, units in the column names);
 - ``snapshots/net_*.vtu`` + ``net.pvd``: the net as a line mesh (ParaView / PyVista);
-- ``deploy.png``: plots like the paper's Fig. 7 (traction) or Fig. 9 (rotary);
-- ``shapes.png``: the net at eight instants, like the paper's Fig. 6 / Fig. 8;
+- ``deploy.png``: plots like the paper's Fig. 7 (traction) or Fig. 9 (rotary) above the net at
+  eight instants, like its Fig. 6 / Fig. 8 (one figure: ``net.plots``);
 - ``net_state.npz`` (allow_pickle=False): the state at maximum area (``t``, ``x``, ``v``,
   ``hub``, ``wrap``) plus the topology arrays, for the collision stage.
 """
@@ -25,7 +25,7 @@ from flexnet_fe.errors import NumericalError
 from flexnet_fe.io import write_history_csv
 from flexnet_fe.net.area import loop_area, raster_area
 from flexnet_fe.net.config import DeployConfig, RotaryNet, TractionNet
-from flexnet_fe.net.plots import plot_history, plot_shapes
+from flexnet_fe.net.plots import plot_deployment
 from flexnet_fe.net.snapshots import write_pvd, write_vtu
 from flexnet_fe.net.state import (Environment, NetState, energies, evaluate_tensions, initial_state,
                                   step_many)
@@ -75,7 +75,7 @@ HISTORY_COLUMNS = (
 
 
 class _Recorder:
-    """One history row per output time, the VTU snapshots, the shapes for ``shapes.png`` and
+    """One history row per output time, the VTU snapshots, the shapes for ``deploy.png`` and
     the state at maximum area."""
 
     def __init__(self, model: NetModel, env: Environment, deploy: DeployConfig, snap_dir: Path, n_out: int):
@@ -88,17 +88,21 @@ class _Recorder:
         self.shape_ks = set(np.linspace(0, n_out, 8).round().astype(int).tolist())
         # segments that end on a corner / tip mass (the ropes pulling the masses back)
         self.at_mass = np.isin(model.springs, model.mass_nodes).any(axis=1)
+        self.clock = {"kernel": 0.0, "area": 0.0, "snapshots": 0.0, "record_other": 0.0}  # wall [s]
 
     def record(self, k: int, state: NetState, peak: float) -> None:
         """Row ``k`` from ``state``; ``peak`` [N] the largest tension of the interval ending here."""
         model, cols = self.model, self.cols
+        w0 = time.perf_counter()
         evaluate_tensions(model, state, self.env)  # at this row's state (the kernel's are a step old)
         x, v = state.x, state.v
         mtot = model.mass.sum()
         vcom = (model.mass[:, None] * v).sum(axis=0) / mtot
         mv = v[model.mass_nodes]
         cols["t_s"][k] = state.t
+        w1 = time.perf_counter()
         area = net_area(model, x, self.deploy.area_pixel)
+        w2 = time.perf_counter()
         cols["area_m2"][k] = area
         cols["area_loop_m2"][k] = loop_area(x[:, :2], model.boundary_loop)
         cols["mass_speed_rel_mps"][k] = float(np.linalg.norm(mv - vcom, axis=1).mean())
@@ -118,10 +122,15 @@ class _Recorder:
         if area > self.best["area"]:
             self.best.update(area=area, t=state.t, x=x.copy(), v=v.copy(), hub=state.hub.copy(),
                              wrap=state.wrap.copy())
+        w3 = time.perf_counter()
         if k % self.snap_every == 0:
             name = f"net_{k // self.snap_every:05d}.vtu"
             write_vtu(self.snap_dir / name, x, v, model.springs, state.tension)
             self.snaps.append((state.t, f"snapshots/{name}"))
+        clock = self.clock
+        clock["area"] += w2 - w1
+        clock["snapshots"] += time.perf_counter() - w3
+        clock["record_other"] += (w1 - w0) + (w3 - w2)
 
 
 def _setup(net: TractionNet | RotaryNet, deploy: DeployConfig, air: Air, log: logging.Logger):
@@ -174,7 +183,9 @@ def _march(model: NetModel, state: NetState, ts, deploy: DeployConfig, rec: _Rec
         for k in range(1, n_out + 1):
             sub, lim = _substeps(ts, deploy, cols["dt_drag_limit_s"][k - 1], state.t)
             dt = deploy.output_interval / sub  # outputs fall on steps; dt <= safety × limit
+            w0 = time.perf_counter()
             peak, drag_number = step_many(model, state, rec.env, dt, sub, lim)
+            rec.clock["kernel"] += time.perf_counter() - w0
             steps += sub
             state.t = k * deploy.output_interval  # remove round-off drift of the summed steps
             if drag_number > 2.0:
@@ -241,7 +252,8 @@ def run_deploy(net: TractionNet | RotaryNet, deploy: DeployConfig, air: Air, sta
                log: logging.Logger) -> dict:
     """Simulate the deployment and write its outputs; returns the ``deploy`` summary section
     (SI units): max_area_m2, time_to_max_area_s, initial_area_m2, period_s, max_tension_n,
-    steps, dt_s, wall_s, plus the first opening's maximum (``first_max_area_m2`` at
+    steps, dt_s, wall_s (and its split ``wall_breakdown_s``: kernel, area, snapshots, record_other,
+    plots, rest [s]), plus the first opening's maximum (``first_max_area_m2`` at
     ``time_to_first_max_area_s``), dt limits, snapshot and state file names, air state.
     ``max_area_m2`` is the largest area over the whole simulated time; ``net_state.npz`` holds
     the state at that instant."""
@@ -261,12 +273,14 @@ def run_deploy(net: TractionNet | RotaryNet, deploy: DeployConfig, air: Air, sta
     write_net_state(stage_dir / NET_STATE, model, rec.best)
     title = (f"{model.kind} net deployment — air {'on' if deploy.air else 'off'}, "
              f"Mach {deploy.mach:g} at {air.altitude:.0f} m, d = {net.rope_diameter * 1e3:g} mm (world frame W)")
-    plot_history(stage_dir / "deploy.png", rec.cols, model.kind, title)
-    plot_shapes(stage_dir / "shapes.png", rec.shapes, model.springs,
-                f"{model.kind} net, projection on the world x–y plane (normal to the flight direction)")
+    w0 = time.perf_counter()
+    plot_deployment(stage_dir / "deploy.png", rec.cols, rec.shapes, model.springs, model.kind, title)
+    rec.clock["plots"] = time.perf_counter() - w0
 
     summary = _summary(rec.cols, model, ts, deploy, air, speed, steps)
     summary["wall_s"] = time.perf_counter() - wall0
+    rec.clock["rest"] = summary["wall_s"] - sum(rec.clock.values())
+    summary["wall_breakdown_s"] = dict(rec.clock)
     log.info("max area %.2f m^2 at t = %.3f s (initial %.2f m^2), period %s s, max tension %.4g N, %.1f s wall",
              summary["max_area_m2"], summary["time_to_max_area_s"], summary["initial_area_m2"],
              summary["period_s"], summary["max_tension_n"], summary["wall_s"])

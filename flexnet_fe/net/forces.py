@@ -35,26 +35,31 @@ def rope_tension(length, rest_length, stiffness, damping, offset, length_rate):
     return t if t > 0.0 else 0.0
 
 
-@njit(cache=True)
-def spring_force(d0, d1, d2, w0, w1, w2, extra, rest_length, stiffness, damping, offset):
+@njit(cache=True, error_model="numpy")
+def spring_force(d, w, extra, law):
     """The one rope-segment mapper of the package (deploy ``net.kernels`` and collide
     ``collide.kernel``): Eq. (1)–(4) on a segment whose end j is at d = x_j − x_i [m] from end i
-    and moves at w = v_j − v_i [m/s] relative to it; ``extra`` [m] is rope length not on the
-    straight line (the hub wrap, Eq. 12–19; 0 otherwise).
+    and moves at w = v_j − v_i [m/s] relative to it (d, w: tuples of 3 floats); ``extra`` [m]
+    is rope length not on the straight line (the hub wrap, Eq. 12–19; 0 otherwise); ``law`` =
+    (rest length l0 [m], stiffness K [N/m], damping c [N s/m], offset [m]), the arguments of
+    :func:`rope_tension`.
 
-    Returns (T [N] from :func:`rope_tension`, unit vector u (3 floats) from i to j, straight
+    Returns (T [N] by :func:`rope_tension`'s law, unit vector u (3 floats) from i to j, straight
     length |d| [m], length rate l̇ [m/s], stretch l − (l0 − offset) [m]); the force on node i is
-    +T u, on node j −T u. A zero-length segment returns T = 0 and u = 0."""
+    +T u, on node j −T u. A zero-length segment returns T = 0 and u = 0. Written with
+    selects, not branches, and one division: this is the deploy kernel's hot loop."""
+    d0, d1, d2 = d
+    rest_length, stiffness, damping, offset = law
     lf = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-    if lf == 0.0:
-        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, extra - (rest_length - offset)
-    u0 = d0 / lf
-    u1 = d1 / lf
-    u2 = d2 / lf
-    ldot = w0 * u0 + w1 * u1 + w2 * u2
-    ln = lf + extra
-    return (rope_tension(ln, rest_length, stiffness, damping, offset, ldot), u0, u1, u2, lf, ldot,
-            ln - (rest_length - offset))
+    inv = 1.0 / lf if lf > 0.0 else 0.0
+    u0 = d0 * inv
+    u1 = d1 * inv
+    u2 = d2 * inv
+    ldot = w[0] * u0 + w[1] * u1 + w[2] * u2
+    stretch = lf + extra - (rest_length - offset)
+    t = stiffness * stretch + damping * ldot
+    t = max(t, 0.0) if stretch > 0.0 and lf > 0.0 else 0.0
+    return t, u0, u1, u2, lf, ldot, stretch
 
 
 @njit(cache=True)
@@ -76,13 +81,13 @@ def aero_coefficients(sin_alpha):
     return CD_FRICTION + C_CROSS * s * s * s, C_CROSS * s * s * c
 
 
-@njit(cache=True)
-def segment_aero_force(u0, u1, u2, length, vx, vy, vz, rho, diameter):
-    """Aerodynamic force on one rope segment [N], Eq. (5)–(8). Returns (Fx, Fy, Fz).
+@njit(cache=True, error_model="numpy")
+def segment_aero_force(u, length, vrel, rho, diameter):
+    """Aerodynamic force on one rope segment [N], Eq. (5)–(8). Returns (Fx, Fy, Fz, |v| [m/s]).
 
-    (u0, u1, u2) : unit vector along the segment; length l [m]; (vx, vy, vz) : segment velocity
-    relative to the air [m/s] (mean of its end velocities minus the wind); rho [kg/m^3];
-    diameter d [m].
+    u : unit vector along the segment (3 floats); length l [m]; vrel : segment velocity
+    relative to the air [m/s] (3 floats: mean of its end velocities minus the wind);
+    rho [kg/m^3]; diameter d [m]. |v| is returned for the caller's drag stability bound.
 
     Drag F_D = ½ ρ C_D d l |v|^2 along -v̂; lift F_L = ½ ρ C_L d l |v|^2 along ê_L, the unit
     vector perpendicular to v̂ in the plane of v̂ and the segment, on the side opposite to the
@@ -92,6 +97,8 @@ def segment_aero_force(u0, u1, u2, length, vx, vy, vz, rho, diameter):
     F = -½ ρ d l (0.022 |v| v + 1.1 |v_n| v_n) (cross-flow principle), which is how it is
     evaluated (exact, and free of the α = 0 / 90° singularities of ê_L).
     """
+    u0, u1, u2 = u
+    vx, vy, vz = vrel
     v2 = vx * vx + vy * vy + vz * vz
     ve = vx * u0 + vy * u1 + vz * u2
     vm = math.sqrt(v2)
@@ -99,7 +106,7 @@ def segment_aero_force(u0, u1, u2, length, vx, vy, vz, rho, diameter):
     q = -0.5 * rho * diameter * length
     a = q * CD_FRICTION * vm
     b = q * C_CROSS * vnm
-    return (a * vx + b * (vx - ve * u0), a * vy + b * (vy - ve * u1), a * vz + b * (vz - ve * u2))
+    return (a * vx + b * (vx - ve * u0), a * vy + b * (vy - ve * u1), a * vz + b * (vz - ve * u2), vm)
 
 
 class RopeMaterial(NamedTuple):

@@ -67,15 +67,24 @@ def wrap_geometry(qx, qy, beta, r0, wrap_prev):
 
 
 @njit(cache=True)
-def hub_link_state(x, v, hub, j, theta, omega, anchor, r0, half_length, wrap_prev, out_t, out_vt):
-    """Geometry of one hub link: writes the rim point T [m] into out_t (3,) and its material
-    velocity v_T = v_c + ω ẑ × (T - c) [m/s] into out_vt (3,). Returns (γ, ϕ).
-    x, v (n, 3); hub = hub centre node index; j = warp node; theta, omega = hub angle [rad] and
-    spin [rad/s]; anchor = β0 [rad]; half_length = H/2 [m]."""
-    if abs(x[j, 2] - x[hub, 2]) > half_length:
-        gamma, w = theta + anchor, 0.0
+def hub_link_state(model, state, s, out_t, out_vt):
+    """Geometry of hub link s: writes the rim point T [m] into out_t (3,) and its material
+    velocity v_T = v_c + ω ẑ × (T - c) [m/s] into out_vt (3,). Returns (γ, ϕ) [rad].
+    ``model`` a ``net.kernels.DeployModel`` (hub node, warp node springs[s, 1], anchor β0,
+    r0, H/2), ``state`` a ``DeployState`` (x, v (n, 3); hub = (θ, ω); wrap[s] the wound angle
+    of the previous step, read only)."""
+    x = state.x
+    v = state.v
+    hub = model.hub
+    j = model.springs[s, 1]
+    theta = state.hub[0]
+    omega = state.hub[1]
+    r0 = model.r0
+    if abs(x[j, 2] - x[hub, 2]) > model.half_length:
+        gamma, w = theta + model.anchor[s], 0.0
     else:
-        gamma, w = wrap_geometry(x[j, 0] - x[hub, 0], x[j, 1] - x[hub, 1], theta + anchor, r0, wrap_prev)
+        gamma, w = wrap_geometry(x[j, 0] - x[hub, 0], x[j, 1] - x[hub, 1], theta + model.anchor[s], r0,
+                                 state.wrap[s])
     cg = math.cos(gamma)
     sg = math.sin(gamma)
     out_t[0] = x[hub, 0] + r0 * cg

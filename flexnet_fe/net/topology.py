@@ -9,6 +9,7 @@ the mass of every segment it ends (plus any concentrated mass: corner, tip, hub)
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -94,10 +95,26 @@ class NetModel:
     def n_springs(self) -> int:
         return len(self.springs)
 
-    @property
+    @cached_property
     def stiffness(self) -> np.ndarray:
-        """Segment stiffness K = EA / l0 [N/m], shape (m,), Eq. (3)."""
-        return segment_stiffness(self.stiffness_ea, self.rest_length)
+        """Segment stiffness K = EA / l0 [N/m], shape (m,), Eq. (3) (computed once, read-only)."""
+        return _frozen(segment_stiffness(self.stiffness_ea, self.rest_length))
+
+    @cached_property
+    def kernel_springs(self) -> np.ndarray:
+        """``springs`` as uint32 (m, 2), the deploy kernel's index type (computed once, read-only)."""
+        return _frozen(self.springs.astype(np.uint32))
+
+    @cached_property
+    def links(self) -> np.ndarray:
+        """Indices of the hub links, shape (k,), int64 (computed once, read-only)."""
+        return _frozen(np.flatnonzero(self.hub_link))
+
+
+def _frozen(a: np.ndarray) -> np.ndarray:
+    """``a`` made read-only (the model's derived arrays are shared by every caller)."""
+    a.setflags(write=False)
+    return a
 
 
 def segment_stiffness(ea: np.ndarray, rest: np.ndarray) -> np.ndarray:
@@ -171,8 +188,9 @@ def _fan(ring: list[int]) -> list[tuple[int, int, int]]:
     return [(ring[0], ring[q], ring[q + 1]) for q in range(1, len(ring) - 1)]
 
 
-def _traction_bars(nk: int, kid: np.ndarray, nodes: _Nodes, knots: np.ndarray):
-    """Springs (list of pairs) and the node chain of every mesh bar keyed by its knot pair."""
+def _traction_bars(nk: int, kid: list, nodes: _Nodes, knots: np.ndarray):
+    """Springs (list of pairs) and the node chain of every mesh bar keyed by its knot pair;
+    ``kid`` the knot ids as nested lists (Python ints: fast dict keys)."""
     springs, bar_nodes = [], {}
 
     def add_bar(a, b):
@@ -182,28 +200,28 @@ def _traction_bars(nk: int, kid: np.ndarray, nodes: _Nodes, knots: np.ndarray):
 
     for i in range(nk):
         for j in range(nk - 1):
-            add_bar(kid[i, j], kid[i, j + 1])
+            add_bar(kid[i][j], kid[i][j + 1])
     for i in range(nk - 1):
         for j in range(nk):
-            add_bar(kid[i, j], kid[i + 1, j])
+            add_bar(kid[i][j], kid[i + 1][j])
     return springs, bar_nodes
 
 
-def _traction_cells_and_loop(nk: int, kid: np.ndarray, bar_nodes: dict):
+def _traction_cells_and_loop(nk: int, kid: list, bar_nodes: dict):
     """Cells (each mesh square the polygon of its subdivided edges, fanned from a corner) and
     the ordered perimeter nodes."""
     tris = []
     for i in range(nk - 1):
         for j in range(nk - 1):
-            ring = (bar_nodes[(kid[i, j], kid[i, j + 1])][:-1]
-                    + bar_nodes[(kid[i, j + 1], kid[i + 1, j + 1])][:-1]
-                    + bar_nodes[(kid[i + 1, j], kid[i + 1, j + 1])][::-1][:-1]
-                    + bar_nodes[(kid[i, j], kid[i + 1, j])][::-1][:-1])
+            ring = (bar_nodes[(kid[i][j], kid[i][j + 1])][:-1]
+                    + bar_nodes[(kid[i][j + 1], kid[i + 1][j + 1])][:-1]
+                    + bar_nodes[(kid[i + 1][j], kid[i + 1][j + 1])][::-1][:-1]
+                    + bar_nodes[(kid[i][j], kid[i + 1][j])][::-1][:-1])
             tris.extend(_fan(ring))
-    loop = (sum((bar_nodes[(kid[0, j], kid[0, j + 1])][:-1] for j in range(nk - 1)), [])
-            + sum((bar_nodes[(kid[i, -1], kid[i + 1, -1])][:-1] for i in range(nk - 1)), [])
-            + sum((bar_nodes[(kid[-1, j], kid[-1, j + 1])][::-1][:-1] for j in reversed(range(nk - 1))), [])
-            + sum((bar_nodes[(kid[i, 0], kid[i + 1, 0])][::-1][:-1] for i in reversed(range(nk - 1))), []))
+    loop = (sum((bar_nodes[(kid[0][j], kid[0][j + 1])][:-1] for j in range(nk - 1)), [])
+            + sum((bar_nodes[(kid[i][-1], kid[i + 1][-1])][:-1] for i in range(nk - 1)), [])
+            + sum((bar_nodes[(kid[-1][j], kid[-1][j + 1])][::-1][:-1] for j in reversed(range(nk - 1))), [])
+            + sum((bar_nodes[(kid[i][0], kid[i + 1][0])][::-1][:-1] for i in reversed(range(nk - 1))), []))
     return np.asarray(tris, dtype=np.int64), np.asarray(loop, dtype=np.int64)
 
 
@@ -223,7 +241,7 @@ def build_traction(cfg: TractionNet) -> NetModel:
     knots = np.column_stack([X.ravel(), Y.ravel(), np.zeros(nk * nk)])
     kid = np.arange(nk * nk).reshape(nk, nk)
     nodes = _Nodes(knots, cfg.subdivisions)
-    springs, bar_nodes = _traction_bars(nk, kid, nodes, knots)
+    springs, bar_nodes = _traction_bars(nk, kid.tolist(), nodes, knots)
     x0 = nodes.coordinates()
     springs = np.asarray(springs, dtype=np.int64)
     n = len(x0)
@@ -238,7 +256,7 @@ def build_traction(cfg: TractionNet) -> NetModel:
     for c in corners:
         sx, sy = np.sign(x0[c, 0]), np.sign(x0[c, 1])
         v0[c] = cfg.corner_speed * np.array([np.cos(e) * sx * np.cos(a), np.cos(e) * sy * np.sin(a), np.sin(e)])
-    cells, loop = _traction_cells_and_loop(nk, kid, bar_nodes)
+    cells, loop = _traction_cells_and_loop(nk, kid.tolist(), bar_nodes)
     drag_free = np.zeros(n, dtype=np.bool_)
     drag_free[corners] = True
     return NetModel(kind="traction", x0=x0, v0=v0, mass=mass, springs=springs, rest_length=rest,

@@ -16,8 +16,9 @@ def production_forces(x, v, springs, rest, k, c, diameter, air=False, wind=(0.0,
     no hub: f (n, 3) [N], tension (m,) [N]."""
     n, m = len(x), len(springs)
     f, t = np.zeros((n, 3)), np.zeros(m)
-    model = DeployModel(springs, np.full(m, rest), np.full(m, k), np.full(m, c), np.zeros(m), np.full(m, diameter),
-                        np.zeros(m, np.bool_), np.zeros(m), np.ones(n), -1, 0.1, 0.01, 1.0, np.zeros(3),
+    model = DeployModel(np.asarray(springs, np.uint32), np.full(m, rest), np.full(m, k), np.full(m, c), np.zeros(m),
+                        np.full(m, diameter), np.zeros(m, np.bool_), np.zeros(0, np.int64), np.zeros(m), np.ones(n),
+                        -1, 0.1, 0.01, 1.0, np.zeros(3),
                         float(rho), np.asarray(wind, float), air)
     state = DeployState(np.asarray(x, float), np.asarray(v, float), np.zeros(2), np.zeros(m), t)
     net_forces(model, state, f, np.zeros(n))
@@ -26,12 +27,12 @@ def production_forces(x, v, springs, rest, k, c, diameter, air=False, wind=(0.0,
 
 def test_spring_force_mapper_hand_values():
     # the shared mapper (deploy and collide kernels): 3-4-5 triangle, taut, stretching at 2 m/s
-    t, u0, u1, u2, lf, ldot, stretch = spring_force(0.03, 0.04, 0.0, 0.6, 0.8, 0.0, 0.0, 0.04, K, C, 0.0)
+    t, u0, u1, u2, lf, ldot, stretch = spring_force((0.03, 0.04, 0.0), (0.6, 0.8, 0.0), 0.0, (0.04, K, C, 0.0))
     assert (u0, u1, u2) == pytest.approx((0.6, 0.8, 0.0), abs=1e-15)
     assert lf == pytest.approx(0.05, rel=1e-15) and ldot == pytest.approx(1.0, rel=1e-15)
     assert stretch == pytest.approx(0.01, rel=1e-12) and t == pytest.approx(K * 0.01 + C * 1.0, rel=1e-12)
     # wrapped length (hub link): the extra length counts in the stretch, not in the direction
-    t2, *_ = spring_force(0.03, 0.04, 0.0, 0.0, 0.0, 0.0, 0.005, 0.05, K, 0.0, 0.0)
+    t2, *_ = spring_force((0.03, 0.04, 0.0), (0.0, 0.0, 0.0), 0.005, (0.05, K, 0.0, 0.0))
     assert t2 == pytest.approx(K * 0.005, rel=1e-12)
 
 
@@ -91,7 +92,7 @@ def test_segment_force_is_drag_plus_lift(alpha_deg):
     a = math.radians(alpha_deg)
     e = np.array([math.cos(a), math.sin(a), 0.0])       # segment axis
     v = np.array([vmag, 0.0, 0.0])                       # relative velocity along +x
-    out = np.array(segment_aero_force(e[0], e[1], e[2], l, v[0], v[1], v[2], rho, d))
+    out = np.array(segment_aero_force((e[0], e[1], e[2]), l, (v[0], v[1], v[2]), rho, d)[:3])
     cd, cl = aero_coefficients(math.sin(a))
     q = 0.5 * rho * d * l * vmag**2
     vn = v - (v @ e) * e                                  # cross-flow velocity (along -y or 0)
