@@ -249,8 +249,9 @@ def _summary(cols: dict, model: NetModel, ts, deploy: DeployConfig, air: Air, sp
 
 
 def run_deploy(net: TractionNet | RotaryNet, deploy: DeployConfig, air: Air, stage_dir: Path,
-               log: logging.Logger) -> dict:
-    """Simulate the deployment and write its outputs; returns the ``deploy`` summary section
+               log: logging.Logger, plots: bool = True) -> dict:
+    """Simulate the deployment and write its outputs (``deploy.png`` only if ``plots``: the
+    accuracy-vs-cost study times the simulation without the figure); returns the ``deploy`` summary section
     (SI units): max_area_m2, time_to_max_area_s, initial_area_m2, period_s, max_tension_n,
     steps, dt_s, wall_s (and its split ``wall_breakdown_s``: kernel, area, snapshots, record_other,
     plots, rest [s]), plus the first opening's maximum (``first_max_area_m2`` at
@@ -274,7 +275,8 @@ def run_deploy(net: TractionNet | RotaryNet, deploy: DeployConfig, air: Air, sta
     title = (f"{model.kind} net deployment — air {'on' if deploy.air else 'off'}, "
              f"Mach {deploy.mach:g} at {air.altitude:.0f} m, d = {net.rope_diameter * 1e3:g} mm (world frame W)")
     w0 = time.perf_counter()
-    plot_deployment(stage_dir / "deploy.png", rec.cols, rec.shapes, model.springs, model.kind, title)
+    if plots:
+        plot_deployment(stage_dir / "deploy.png", rec.cols, rec.shapes, model.springs, model.kind, title)
     rec.clock["plots"] = time.perf_counter() - w0
 
     summary = _summary(rec.cols, model, ts, deploy, air, speed, steps)

@@ -4,7 +4,6 @@ function itself)."""
 
 from __future__ import annotations
 
-import contextlib
 import logging
 
 from flexnet_fe.atmosphere import isa
@@ -33,31 +32,12 @@ def points(quick: bool) -> list[Point]:
     return out
 
 
-@contextlib.contextmanager
-def without_stage_plots():
-    """The deploy stage's two PNG plots (plot_history, plot_shapes: ≈ 1–4 s, constant, most of a
-    small net's stage time) replaced by no-ops while a study point runs: the study measures the
-    simulation (kernel, time-step control, area rasterising, history), not the figures. If the
-    stage module no longer has these names, the plots stay and the cost includes them."""
-    from flexnet_fe.net import deploy as D
-
-    names = [n for n in ("plot_history", "plot_shapes") if hasattr(D, n)]
-    saved = {n: getattr(D, n) for n in names}
-    try:
-        for n in names:
-            setattr(D, n, lambda *a, **k: None)
-        yield
-    finally:
-        for n, f in saved.items():
-            setattr(D, n, f)
-
-
 def deploy_summary(case, stage_dir) -> dict:
-    """``run_deploy``'s summary for ``case`` (stage plots off, see :func:`without_stage_plots`)."""
+    """``run_deploy``'s summary for ``case``, without the stage's figure (the study measures the
+    simulation — kernel, time-step control, area, history, snapshots — not matplotlib)."""
     from flexnet_fe.net.deploy import run_deploy
 
-    with without_stage_plots():
-        return run_deploy(case.net, case.deploy, isa(case.atmosphere.altitude), stage_dir, LOG)
+    return run_deploy(case.net, case.deploy, isa(case.atmosphere.altitude), stage_dir, LOG, plots=False)
 
 
 def run_point(p: Point, ctx: Context) -> tuple[dict, dict]:
