@@ -240,7 +240,8 @@ def _plate_chart(rows, png: Path) -> None:
     print(f"chart: {png}")
 
 
-def _run_stage(run_dir: Path, mesh_size: float, fins, out: Path, end_time=None) -> dict:
+def _run_stage(run_dir: Path, mesh_size: float, fins, out: Path, end_time=None,
+               shell_set: dict | None = None) -> dict:
     from flexnet_fe.missile.config import MissileConfig
     from flexnet_fe.missile.build import build_missile
     from flexnet_fe.missile.mesh import write_meshes
@@ -253,7 +254,8 @@ def _run_stage(run_dir: Path, mesh_size: float, fins, out: Path, end_time=None) 
     shell = ShellConfig.model_validate({**(case.get("shell") or {}),
                                         **({"fins": "named", "fin_names": list(fins)} if fins
                                            else {}),
-                                        **({"end_time": end_time} if end_time else {})})
+                                        **({"end_time": end_time} if end_time else {}),
+                                        **(shell_set or {})})
     paths = write_meshes(mcfg, out / "meshes")
     specs = fin_specs(build_missile(mcfg).fins, paths)
     log = logging.getLogger("bench_shell")
@@ -270,19 +272,33 @@ def cmd_paper(args) -> dict:
     fins = [f for f in args.fins.split(",") if f] if args.fins else None
     import tempfile
     rows = []
-    for h in sizes:
+    shell_set = {"stvenant_radius_factor": args.factor}
+    local = [float(x) for x in args.local.split(",")] if args.local else []
+    runs = [(h, None) for h in sizes] + [(sizes[-1] if sizes else 0.02, hl) for hl in local]
+    for h, hl in runs:
         with tempfile.TemporaryDirectory() as td:
-            s = _run_stage(run_dir, h, fins, Path(td), args.end_time)
+            s = _run_stage(run_dir, h, fins, Path(td), args.end_time,
+                           {**shell_set, "local_mesh_size": hl})
+        if hl is not None:
+            h = hl
         for name, r in s.items():
             if isinstance(r, dict) and "peak_von_mises_pa" in r:
-                rows.append(dict(mesh_size=h, fin=name, peak=r["peak_von_mises_pa"],
-                                 t=r["peak_time_s"], loc=r["peak_location_m"],
-                                 est=r["peak_error_estimate_rel"], dofs=r["dofs"],
-                                 steps=r["steps"]))
+                rows.append(dict(mesh_size=h, fin=name, factor=args.factor,
+                                 peak=r["peak_von_mises_pa"], t=r["peak_time_s"],
+                                 loc=r["peak_location_m"], est=r["peak_error_estimate_rel"],
+                                 raw=r["peak_von_mises_with_load_zones_pa"],
+                                 p1=r["peak_max_principal_pa"], bearing=r["peak_bearing_pa"],
+                                 bearing_kind=r["peak_bearing_kind"],
+                                 radius=r["stvenant_radius_m"], dofs=r["dofs"],
+                                 steps=r["steps"], wall=s["bench_wall_s"], local=hl,
+                                 h_min=r["h_min_m"]))
                 print(f"h = {1e3 * h:5.2f} mm {name:9s} {r['dofs']:7d} DOFs {r['steps']:7d} steps:"
-                      f" peak {r['peak_von_mises_pa'] / 1e6:9.2f} MPa at "
-                      f"{1e3 * r['peak_time_s']:.4f} ms, ZZ estimate "
-                      f"{100 * r['peak_error_estimate_rel']:.2f} %", flush=True)
+                      f" structural peak {r['peak_von_mises_pa'] / 1e6:9.2f} MPa at "
+                      f"{1e3 * r['peak_time_s']:.4f} ms {r['peak_location_m']}, ZZ estimate "
+                      f"{100 * r['peak_error_estimate_rel']:.2f} % (r_ex "
+                      f"{1e3 * r['stvenant_radius_m']:.1f} mm; with the load zones "
+                      f"{r['peak_von_mises_with_load_zones_pa'] / 1e6:.1f} MPa; bearing "
+                      f"{r['peak_bearing_pa'] / 1e6:.1f} MPa {r['peak_bearing_kind']})", flush=True)
         print(f"h = {1e3 * h:5.2f} mm: stage wall {s['bench_wall_s']:.1f} s", flush=True)
     for name in sorted({r["fin"] for r in rows}):
         pk = [(r["mesh_size"], r["peak"]) for r in rows if r["fin"] == name]
@@ -326,6 +342,10 @@ def main() -> None:
     p.add_argument("--fins", default="")
     p.add_argument("--sizes", default="0.02,0.01,0.005")
     p.add_argument("--end-time", type=float, default=None)
+    p.add_argument("--local", default="",
+                   help="local element sizes around the contacts [m] (on the last --sizes mesh)")
+    p.add_argument("--factor", type=float, default=2.0,
+                   help="shell.stvenant_radius_factor (0: peaks at the loads included)")
     c = sub.add_parser("case")
     c.add_argument("run_dir")
     args = ap.parse_args()

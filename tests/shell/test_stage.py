@@ -77,7 +77,9 @@ def test_stage_outputs(tmp_path):
     assert w["peak_time_s"] == h["t_s"][i]
     assert w["peak_von_mises_pa"] >= w["peak_nodal_von_mises_pa"] * (1 - 1e-12)
     np.testing.assert_allclose(w["peak_location_m"], [h[f"max_von_mises_{c}_m"][i] for c in "xyz"])
-    assert 1e6 < w["peak_von_mises_pa"] < 1e10 and w["peak_max_principal_pa"] > 0
+    # (the magnitude of a stage peak is checked against the Navier series in
+    # test_shell_load_option_runs_a_pressure_history_on_a_fin)
+    assert w["peak_max_principal_pa"] > 0
     assert w["allowable_pa"] == 503e6 and 0 < w["peak_error_estimate_rel"] < 1
     assert isinstance(s["warnings"], list)
     os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
@@ -199,5 +201,20 @@ def test_shell_load_option_runs_a_pressure_history_on_a_fin(tmp_path):
     ref = api.solve(m, api.pressure(m, load["times"], load["pressure"]), 6e-4)
     assert s["plate"]["peak_von_mises_pa"] == pytest.approx(ref.peak.value, rel=1e-9)
     assert s["plate"]["peak_time_s"] == pytest.approx(ref.run.peak_t, rel=1e-12)
+    # Independent reference: the Navier series of the same simply supported plate (hard support,
+    # κ = 5/6, rotary inertia ×4), exact for the piecewise-linear pulse: peak surface von Mises
+    # over the stage's sample times and an 11 × 11 grid of a quarter plate (the peak is central).
+    # The plate-series study (docs/validation.md) measured −7.4 % at 12² with O(h²)
+    # convergence; the ZZ estimate is validated there as an upper bound of that error.
+    from flexnet_fe.shell import navier
+    from flexnet_fe.shell.recovery import von_mises
+    t_s = read_history_csv(tmp_path / "out" / "plate" / "history.csv")["t_s"]
+    plate = navier.PlateData(0.2, 0.2, 2e-3, 70e9, 0.3, 2700.0, rotary_scale=4.0)
+    amps = navier.transient_amplitudes(plate, 61, t_s, load["times"], load["pressure"])
+    g = np.linspace(0.0, 0.1, 11)
+    X, Y = (v.ravel() for v in np.meshgrid(g, g))
+    vm_ref = von_mises(navier.fields(plate, amps, X, Y)[1]).max()
+    err = s["plate"]["peak_von_mises_pa"] / vm_ref - 1.0
+    assert abs(err) < 0.10 and abs(err) <= s["plate"]["peak_error_estimate_rel"], (err, vm_ref)
     with pytest.raises(ValidationError, match="supports"):
         ShellConfig(supports={"root": "glued"})
