@@ -462,13 +462,19 @@ def run_shell(shell: ShellConfig, fins: list[FinSpec], contacts_npz: Path,
                    peak_bearing_kind=b.kind, peak_bearing_location_m=b.location_m,
                    peak_bearing_force_n=b.force_n, bearing_allowable_pa=allow_b,
                    bearing_over_allowable=b.peak_pa / allow_b)
+        if b.peak_pa > allow_b:
+            warnings.append(
+                f"shell {spec.name}: local bearing/contact stress {b.peak_pa / 1e6:.4g} MPa "
+                f"({b.kind} load {b.force_n / 1e3:.3g} kN at {1e3 * b.time_s:.4g} ms, closed "
+                f"form) exceeds the bearing allowable {allow_b / 1e6:.4g} MPa "
+                f"({shell.bearing_allowable_factor:g} x yield): the fin is crushed there")
         summary[spec.name] = res
         if res["peak_error_estimate_rel"] > shell.peak_error_tolerance:
             warnings.append(
                 f"shell {spec.name}: peak von Mises {res['peak_von_mises_pa'] / 1e6:.4g} MPa has "
                 f"an estimated error of {100 * res['peak_error_estimate_rel']:.3g} % (> "
                 f"{100 * shell.peak_error_tolerance:.3g} %, shell.peak_error_tolerance): refine "
-                f"the fin mesh")
+                f"the fin mesh at the loads (shell.local_mesh_size)")
         dts.append(res["dt_s"])
         dtcs.append(res["dt_crit_s"])
         dofs += res["dofs"]
