@@ -15,7 +15,9 @@ previous state, f·Δu and the kinetic energy fall out of the same sweep.
 
 Stress sampling (every ``sample_every`` steps) is :func:`flexnet_fe.shell.recovery.sample_nodes`
 called from inside the kernel: nodal surface stresses by lumped L2 projection, per-node envelope,
-global peak (value, node, time) and a copy of u at the running peak.
+global structural peak (value, node, time; nodes inside the St-Venant zones of the contact loads
+active at that instant left out, :mod:`flexnet_fe.shell.hotspot`) and a copy of u at the
+running peak.
 
 The block matrix is built once from the assembled CSR arrays (:func:`upper_blocks`): linear in
 the number of non-zeros, no PETSc AIJ → SBAIJ conversion.
