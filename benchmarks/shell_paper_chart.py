@@ -19,8 +19,9 @@ import matplotlib.pyplot as plt  # noqa: E402
 
 
 def main(src: Path, png: Path) -> None:
-    rows = json.loads(Path(src).read_text())["rows"]
-    fig, ax = plt.subplots(figsize=(7.5, 4.8))
+    data = json.loads(Path(src).read_text())
+    rows = data["rows"]
+    fig, (ax, ax2) = plt.subplots(1, 2, figsize=(13, 4.8))
     styles = {1.0: ("tab:orange", "s"), 2.0: ("tab:blue", "o"), 3.0: ("tab:green", "^")}
     for f, (col, mk) in styles.items():
         loc = sorted((r for r in rows if r["factor"] == f and r["local"]), key=lambda r: -r["h"])
@@ -42,9 +43,24 @@ def main(src: Path, png: Path) -> None:
     ax.invert_xaxis()
     ax.set_xlabel("element size at the contact loads h [mm] (20 mm elsewhere)")
     ax.set_ylabel("peak von Mises, radar × traction wing_1 [MPa]")
-    ax.set_title("Paper fin under refinement: structural peak vs peak at the loads")
+    ax.set_title("wing_1 to 3.45 ms: structural peak vs peak at the loads")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7.5, loc="upper left")
+    wings = data.get("rows_all_wings_14ms", [])
+    for k, name in enumerate(sorted({r["fin"] for r in wings})):
+        rr = sorted((r for r in wings if r["fin"] == name), key=lambda r: -r["h"])
+        col = f"C{k}"
+        ax2.plot([1e3 * r["h"] for r in rr], [r["peak"] / 1e6 for r in rr], "o-", color=col,
+                 label=f"{name} structural peak")
+        ax2.plot([1e3 * r["h"] for r in rr], [r["raw"] / 1e6 for r in rr], "x:", color=col,
+                 label=f"{name} with load zones")
+    ax2.set_xscale("log")
+    ax2.invert_xaxis()
+    ax2.set_xlabel("element size at the contact loads h [mm] (first point: 20 mm uniform)")
+    ax2.set_ylabel("peak von Mises over 14 ms [MPa]")
+    ax2.set_title("All loaded wings, r_ex = 12 mm, local refinement")
+    ax2.grid(True, which="both", alpha=0.3)
+    ax2.legend(fontsize=7, ncol=2, loc="upper left")
     fig.tight_layout()
     fig.savefig(png, dpi=120)
 
