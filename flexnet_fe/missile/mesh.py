@@ -170,3 +170,88 @@ def read_msh_nodes_and_cells(path: Path, dim: int = 2):
             name, _, _, nn, _, _ = gmsh.model.mesh.getElementProperties(t)
             cells[name] = index[np.asarray(c, np.int64)].reshape(-1, nn)
     return x, cells
+
+
+def fin_outline_from_msh(path: Path) -> tuple[np.ndarray, float]:
+    """The four corners of a fin mesh written by :func:`write_meshes` (root TE, root LE, tip LE,
+    tip TE: :data:`EDGE_NAMES` order of the edges between them), shape (4, 3) [m], and its median
+    element edge length [m]."""
+    with gmsh_model("outline") as gmsh:
+        gmsh.merge(str(path))
+        ends = []
+        for name in EDGE_NAMES:
+            tags, x = gmsh.model.mesh.getNodesForPhysicalGroup(1, PHYSICAL_TAGS[name])
+            ends.append(np.asarray(x).reshape(-1, 3))
+    x, cells = read_msh_nodes_and_cells(path)
+    quads = next(iter(cells.values()))
+    edge = np.linalg.norm(x[quads] - x[np.roll(quads, -1, axis=1)], axis=2)
+    corners = []
+    for k in range(4):  # corner k joins edge k − 1 and edge k
+        a, b = ends[k - 1], ends[k]
+        d = np.linalg.norm(a[:, None, :] - b[None, :, :], axis=2)
+        i, _ = np.unravel_index(np.argmin(d), d.shape)
+        corners.append(a[i])
+    return np.array(corners), float(np.median(edge))
+
+
+def write_refined_fin_mesh(corners: np.ndarray, mesh_size: float, points: np.ndarray,
+                           fine_size: float, radius: float, path: Path) -> Path:
+    """An all-quadrilateral fin mesh refined around ``points`` (m, 3) [m] (contact points):
+    element size ``fine_size`` within ``radius`` [m] of a point, growing linearly to
+    ``mesh_size`` over the next 2 × mesh_size (Gmsh Distance + Threshold size fields, frontal
+    Delaunay triangles recombined into quads by the full-quad Blossom algorithm). Corners (4, 3)
+    and physical groups as :func:`build_fin_model`. Written to ``path`` (msh 4.1)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    corners = np.asarray(corners, float)
+    n = np.cross(corners[1] - corners[0], corners[3] - corners[0])
+    n /= np.linalg.norm(n)
+    pts = np.asarray(points, float).reshape(-1, 3)
+    pts = pts - ((pts - corners[0]) @ n)[:, None] * n  # onto the fin plane
+    if len(pts):  # one point per cell of fine_size/2: the field cost stays bounded
+        _, first = np.unique(np.floor(pts / (0.5 * fine_size)).astype(np.int64), axis=0,
+                             return_index=True)
+        pts = pts[np.sort(first)]
+    with gmsh_model("refined_fin") as gmsh:
+        geo = gmsh.model.geo
+        P = [geo.addPoint(*map(float, c)) for c in corners]
+        lines = [geo.addLine(P[k], P[(k + 1) % 4]) for k in range(4)]
+        surf = geo.addPlaneSurface([geo.addCurveLoop(lines)])
+        field_pts = [geo.addPoint(*map(float, p)) for p in pts]
+        geo.synchronize()
+        f = gmsh.model.mesh.field
+        size = mesh_size
+        if field_pts:
+            d = f.add("Distance")
+            f.setNumbers(d, "PointsList", field_pts)
+            th = f.add("Threshold")
+            f.setNumber(th, "InField", d)
+            f.setNumber(th, "SizeMin", fine_size)
+            f.setNumber(th, "SizeMax", mesh_size)
+            f.setNumber(th, "DistMin", radius)
+            f.setNumber(th, "DistMax", radius + 2.0 * mesh_size)
+            f.setAsBackgroundMesh(th)
+            size = fine_size
+        opts = {"Mesh.MeshSizeExtendFromBoundary": 0, "Mesh.MeshSizeFromPoints": 0,
+                "Mesh.MeshSizeFromCurvature": 0, "Mesh.Algorithm": 6, "Mesh.RecombineAll": 1,
+                "Mesh.RecombinationAlgorithm": 3, "Mesh.Smoothing": 10,
+                "Mesh.MeshSizeMin": 0.5 * size, "Mesh.MeshSizeMax": mesh_size,
+                "Mesh.MshFileVersion": 4.1}
+        saved = {k: gmsh.option.getNumber(k) for k in opts}
+        try:
+            for k, v in opts.items():
+                gmsh.option.setNumber(k, v)
+            gmsh.model.addPhysicalGroup(2, [surf], PHYSICAL_TAGS["surface"])
+            gmsh.model.setPhysicalName(2, PHYSICAL_TAGS["surface"], "surface")
+            for k, name in enumerate(EDGE_NAMES):
+                gmsh.model.addPhysicalGroup(1, [lines[k]], PHYSICAL_TAGS[name])
+                gmsh.model.setPhysicalName(1, PHYSICAL_TAGS[name], name)
+            gmsh.model.mesh.generate(2)
+            types, _, _ = gmsh.model.mesh.getElements(2)
+            if any(gmsh.model.mesh.getElementProperties(t)[3] != 4 for t in types):
+                raise RuntimeError("refined fin mesh is not all-quadrilateral")
+            gmsh.write(str(path))
+        finally:
+            for k, v in saved.items():
+                gmsh.option.setNumber(k, v)
+    return path

@@ -89,6 +89,22 @@ class ShellConfig(Section):
     peak_error_tolerance: Positive = Field(
         0.02, description="a fin's peak von Mises whose estimated relative error exceeds this "
                           "adds a line to summary.shell.warnings [-]")
+    stvenant_radius_factor: NonNegative = Field(
+        2.0, description="the reported (structural) peak stress is read outside a zone of radius "
+                         "factor × max(fin thickness, rope width) around every contact load "
+                         "active at that instant, where shell theory does not hold (bearing "
+                         "stress reported apart); 0: no zones [-]")
+    local_mesh_size: Positive | None = Field(
+        None, description="re-mesh each loaded fin with this element size within (St-Venant "
+                          "radius + 2 local sizes) of its contact points, growing to the fin's "
+                          "mesh size (Gmsh size field, unstructured quads); None: the missile's "
+                          "fin mesh as it is [m]")
+    bearing_rope_modulus: Positive = Field(
+        1.0e11, description="rope transverse modulus for the Hertz contact pressure of face loads "
+                            "(keep equal to net.transverse_modulus) [Pa]")
+    bearing_allowable_factor: Positive = Field(
+        1.5, description="bearing allowable = factor × fin yield strength (bearing yield of Al "
+                         "7075-T6 at e/D = 2 is about 1.5 × tensile yield, MMPDS) [-]")
     energy_growth_limit: Positive = Field(
         10.0, gt=1.0,
         description="stop as unstable when kinetic + strain energy exceeds this factor times "

@@ -15,7 +15,9 @@ previous state, f·Δu and the kinetic energy fall out of the same sweep.
 
 Stress sampling (every ``sample_every`` steps) is :func:`flexnet_fe.shell.recovery.sample_nodes`
 called from inside the kernel: nodal surface stresses by lumped L2 projection, per-node envelope,
-global peak (value, node, time) and a copy of u at the running peak.
+global structural peak (value, node, time; nodes inside the St-Venant zones of the contact loads
+active at that instant left out, :mod:`flexnet_fe.shell.hotspot`) and a copy of u at the
+running peak.
 
 The block matrix is built once from the assembled CSR arrays (:func:`upper_blocks`): linear in
 the number of non-zeros, no PETSc AIJ → SBAIJ conversion.
@@ -250,25 +252,32 @@ def _split_row(K, i, u, v, y, beta):
     y[bi + 4] += y4
 
 
+class NodeData(NamedTuple):
+    """Per-node constraint data of the update (frame B, PETSc path)."""
+
+    minv: np.ndarray
+    """1/m on free DOFs, 0 on fixed, (n,)"""
+    wfix: np.ndarray
+    """1.0 at nodes held at w = 0, (n_nodes,)"""
+    normal: np.ndarray
+    """fin normal n (3,)"""
+
+
 @njit(cache=True)
-def node_update(u, v, f5, y, minv, wfix, nrm, i, h, dt, alpha):
-    """Central-difference update of node i's 5 DOFs with its load f5 (5,) (frame B):
+def node_update(u, v, f5, y, N, i, coef):
+    """Central-difference update of node i's 5 DOFs with its load f5 (5,) (frame B), K x in
+    ``y``, constraint data ``N`` (:class:`NodeData`) and coef = (h, dt, α) [s, s, 1/s]:
     a = M⁻¹(f − y) − α v; v += h a; u += dt v; at w-fixed nodes the normal parts of v and u are
     removed (v ← v − (v·n) n, re-masked by M⁻¹ > 0), which is the constrained update
     a ← a − (a·n) n with the round-off of the projection kept from accumulating.
     Returns the node's f·Δu [J]."""
+    h, dt, alpha = coef
+    minv, nrm = N.minv, N.normal
     b = NB * i
-    a0 = minv[b] * (f5[0] - y[b]) - alpha * v[b]
-    a1 = minv[b + 1] * (f5[1] - y[b + 1]) - alpha * v[b + 1]
-    a2 = minv[b + 2] * (f5[2] - y[b + 2]) - alpha * v[b + 2]
-    a3 = minv[b + 3] * (f5[3] - y[b + 3]) - alpha * v[b + 3]
-    a4 = minv[b + 4] * (f5[4] - y[b + 4]) - alpha * v[b + 4]
-    v[b] += h * a0
-    v[b + 1] += h * a1
-    v[b + 2] += h * a2
-    v[b + 3] += h * a3
-    v[b + 4] += h * a4
-    if wfix[i] != 0.0:  # remove the normal part of v (and re-mask): no drift of w by round-off
+    for a in range(NB):
+        acc = minv[b + a] * (f5[a] - y[b + a]) - alpha * v[b + a]
+        v[b + a] += h * acc
+    if N.wfix[i] != 0.0:  # remove the normal part of v (and re-mask): no drift of w by round-off
         vn = v[b] * nrm[0] + v[b + 1] * nrm[1] + v[b + 2] * nrm[2]
         for a in range(3):
             v[b + a] = (v[b + a] - vn * nrm[a]) * (minv[b + a] > 0.0)
@@ -277,7 +286,7 @@ def node_update(u, v, f5, y, minv, wfix, nrm, i, h, dt, alpha):
         du = dt * v[b + a]
         u[b + a] += du
         work += f5[a] * du
-    if wfix[i] != 0.0:
+    if N.wfix[i] != 0.0:
         un = u[b] * nrm[0] + u[b + 1] * nrm[1] + u[b + 2] * nrm[2]
         for a in range(3):
             u[b + a] -= un * nrm[a]
@@ -311,6 +320,11 @@ class StepData(NamedTuple):
     """1.0 at nodes held at w = 0, (n_nodes,)"""
     normal: np.ndarray
     """fin normal (3,)"""
+    xptr: np.ndarray
+    """St-Venant exclusion (:mod:`flexnet_fe.shell.hotspot`): CSR offsets over the contact
+    samples, (nt + 1,) int64"""
+    xnodes: np.ndarray
+    """nodes inside the zones of each sample's loads (nnz,) int64"""
 
 
 class StepParams(NamedTuple):
@@ -340,11 +354,13 @@ class RunState(NamedTuple):
 
 # indices into RunState.scal
 S_STEP, S_WORK, S_WORK_INT, S_E0, S_PEAK_VM, S_PEAK_T, S_PEAK_NODE, S_PEAK_P1, S_PEAK_STEP, \
-    S_PEAK_P1_T, S_NSAMP, S_WORK_NET = range(12)
+    S_PEAK_P1_T, S_NSAMP, S_WORK_NET, S_PEAK_RAW = range(13)
 # S_WORK: Σ over sample intervals of |external work in the interval| [J], the instability
 # guard's energy budget (an upper bound); S_WORK_NET: the signed external work [J] written to
-# the history, so that kinetic + strain − work is the energy balance.
-N_SCAL = 12
+# the history, so that kinetic + strain − work is the energy balance. S_PEAK_* are the
+# structural peak (outside the St-Venant zones of the active loads); S_PEAK_RAW the largest nodal
+# von Mises anywhere, the zones included [Pa].
+N_SCAL = 13
 
 
 def new_state(n: int, u0: np.ndarray | None = None, v0: np.ndarray | None = None) -> RunState:
@@ -374,12 +390,15 @@ class History(NamedTuple):
     """per-node envelope (n_nodes, 2): max over samples of von Mises, max principal [Pa]"""
     nodal: np.ndarray
     """scratch (n_nodes, 4): the last sample's nodal vm_top, vm_bot, p1_top, p1_bot [Pa]"""
+    mask: np.ndarray
+    """scratch (n_nodes,) int8, zero between samples: 1 inside an active St-Venant zone"""
 
 
 def new_history(capacity: int, n_nodes: int) -> History:
     z = lambda: np.zeros(capacity)  # noqa: E731
     return History(t=z(), vm=z(), node=np.zeros(capacity, np.int64), p1=z(), umax=z(), ke=z(),
-                   se=z(), work=z(), env=np.zeros((n_nodes, 2)), nodal=np.zeros((n_nodes, 4)))
+                   se=z(), work=z(), env=np.zeros((n_nodes, 2)), nodal=np.zeros((n_nodes, 4)),
+                   mask=np.zeros(n_nodes, np.int8))
 
 
 @njit(cache=True)
@@ -565,7 +584,7 @@ def advance_steps(D, P, R, St, H, n_steps):
             H.t[row] = step * P.dt
             H.ke[row] = ke
             H.work[row] = sc[S_WORK_NET]
-            _sample(R, St, H, sc, row, step, step * P.dt)
+            _sample(D, R, St, H, row, step, step * P.dt)
             sc[S_NSAMP] = row + 1
             if P.beta != 0.0:
                 split_product(D.K, St.u, St.y)
@@ -598,21 +617,43 @@ def _close_sample(H, sc, row, se, limit):
 
 
 @njit(cache=True)
-def _sample(R, St, H, sc, row, step, t):
-    """Nodal stresses of the current u; history row, envelope and running peak."""
-    vm_max, node, p1_max, umax = sample_nodes(R, St.u, H.nodal)
-    nn = H.nodal.shape[0]
-    for i in range(nn):
+def _mark_zones(D, t, mask, value):
+    """mask[node] = value for the nodes in the St-Venant zones of the loads active at t (the
+    two contact samples bracketing t, as :func:`_scatter_loads` interpolates)."""
+    k, _ = _bracket(D.times, t, 0)
+    if k < 0:
+        return
+    for col in (k, k + 1):
+        if col < len(D.xptr) - 1:
+            for p in range(D.xptr[col], D.xptr[col + 1]):
+                mask[D.xnodes[p]] = value
+
+
+@njit(cache=True)
+def _sample(D, R, St, H, row, step, t):
+    """Nodal stresses of the current u; history row, envelope (all nodes) and running peaks:
+    the structural peak over the nodes outside the active St-Venant zones, and the raw one."""
+    sc = St.scal
+    vm_raw, _, _, umax = sample_nodes(R, St.u, H.nodal)
+    _mark_zones(D, t, H.mask, 1)
+    vm_max, node, p1_max = 0.0, -1, -np.inf
+    for i in range(H.nodal.shape[0]):
         vm = max(H.nodal[i, 0], H.nodal[i, 1])
         p1 = max(H.nodal[i, 2], H.nodal[i, 3])
         if vm > H.env[i, 0]:
             H.env[i, 0] = vm
         if p1 > H.env[i, 1]:
             H.env[i, 1] = p1
+        if H.mask[i] == 0:
+            if vm > vm_max:
+                vm_max, node = vm, i
+            p1_max = max(p1_max, p1)
+    _mark_zones(D, t, H.mask, 0)
     H.vm[row] = vm_max
     H.node[row] = node
     H.p1[row] = p1_max
     H.umax[row] = umax
+    sc[S_PEAK_RAW] = max(sc[S_PEAK_RAW], vm_raw)
     if vm_max > sc[S_PEAK_VM]:
         sc[S_PEAK_VM] = vm_max
         sc[S_PEAK_T] = t

@@ -16,7 +16,8 @@ deflection's order), at boundary nodes O(h). The surface stresses follow pointwi
 von Mises σ_vm = √(σ11² + σ22² − σ11σ22 + 3σ12²), max principal σ_1 = (σ11+σ22)/2 +
 √(((σ11−σ22)/2)² + σ12²). Transverse shear stress is not included (zero at the surfaces).
 
-Peak: the largest nodal von Mises over samples; at the peak's instant the recovered field
+Peak: the largest nodal von Mises over samples (outside the St-Venant zones of the active
+contact loads, :mod:`flexnet_fe.shell.hotspot`); at the peak's instant the recovered field
 σ* = Σ N_i σ*_i is searched inside the cells around that node (:func:`locate_peak`), so the
 reported location lies within the element where the peak occurs. Error estimate: the
 Zienkiewicz–Zhu estimator at the peak, max over the Gauss points of those cells of
@@ -292,10 +293,12 @@ class Peak(NamedTuple):
 
 
 def locate_peak(R: RecoveryData, u: np.ndarray, node: int, x: np.ndarray, origin, *,
-                grid: int = 17) -> Peak:
+                grid: int = 17, exclude: tuple[np.ndarray, np.ndarray] | None = None) -> Peak:
     """Peak of the recovered von Mises σ* = Σ N_i σ*_i around ``node`` at state ``u`` (serial):
-    searched on a grid×grid lattice of each cell containing the node; plus its ZZ error estimate
-    over the Gauss points of those cells (module doc). x: node coordinates (n, 3) [m]."""
+    searched on a grid×grid lattice of each cell containing the node, skipping lattice points
+    inside the St-Venant zones ``exclude`` = (load points (m, 3) [m], radii (m,) [m]); plus its
+    ZZ error estimate over the Gauss points of those cells (module doc). x: node coordinates
+    (n, 3) [m]."""
     s_nodes = nodal_strains(R, u)
     cells = np.flatnonzero((R.cells == node).any(axis=1))
     t = R.material[2]
@@ -305,11 +308,18 @@ def locate_peak(R: RecoveryData, u: np.ndarray, node: int, x: np.ndarray, origin
     best = (-1.0, None, None, None)
     for c in cells:
         sc = N @ s_nodes[R.cells[c]]  # (m, 6)
+        xq = N @ x[R.cells[c]]
+        out = np.ones(len(xq), bool)
+        if exclude is not None and len(exclude[0]):
+            d = np.linalg.norm(xq[:, None, :] - exclude[0][None], axis=2)
+            out = ~(d < exclude[1][None]).any(axis=1)
+        if not out.any():
+            continue
         for z, name in ((0.5 * t, "top"), (-0.5 * t, "bottom")):
-            vm = von_mises(stress_tensors(sc, R, z))
+            vm = np.where(out, von_mises(stress_tensors(sc, R, z)), -1.0)
             k = int(np.argmax(vm))
             if vm[k] > best[0]:
-                best = (float(vm[k]), N[k] @ x[R.cells[c]], name, int(c))
+                best = (float(vm[k]), xq[k], name, int(c))
     value, loc, surf, cbest = best
     z = 0.5 * t if surf == "top" else -0.5 * t
     eta = 0.0

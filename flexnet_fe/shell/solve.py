@@ -20,6 +20,7 @@ from mpi4py import MPI
 from flexnet_fe.shell import kernel as kn
 from flexnet_fe.shell.explicit import (Backend, LoadHistory, central_difference, constrain)
 from flexnet_fe.shell.forms import NDOF_NODE
+from flexnet_fe.shell.hotspot import Exclusion, no_exclusion
 from flexnet_fe.shell.model import ShellModel
 from flexnet_fe.shell.recovery import (RecoveryData, accumulate_cells, build_recovery,
                                        nodal_from_numerators)
@@ -78,6 +79,8 @@ class RunResult:
     """0, or the step at which the energy check failed"""
     u: np.ndarray
     """final state, owned DOFs, frame B"""
+    peak_raw: float = 0.0
+    """largest nodal von Mises over samples anywhere, St-Venant zones included [Pa]"""
 
 
 FrameFn = Callable[[float, np.ndarray], None]
@@ -87,11 +90,15 @@ FrameFn = Callable[[float, np.ndarray], None]
 def run(model: ShellModel, loads: LoadHistory, R: RecoveryData, *, dt: float, n_steps: int,
         sample_every: int, frame_every: int, alpha: float = 0.0, beta: float = 0.0,
         growth_limit: float = 10.0, frame: FrameFn | None = None,
-        backend: Backend = Backend.AUTO, u0: np.ndarray | None = None) -> RunResult:
+        backend: Backend = Backend.AUTO, u0: np.ndarray | None = None,
+        exclusion: Exclusion | None = None) -> RunResult:
     """Advance ``n_steps`` steps of size ``dt`` [s], sampling stresses every ``sample_every``
     steps and calling ``frame`` every ``frame_every`` steps (a multiple of sample_every), at
     step 0 and at the end — and, before a regular frame, at the latest running von Mises peak
-    if it rose since the previous frame (so the frames include the final peak's instant)."""
+    if it rose since the previous frame (so the frames include the final peak's instant).
+    ``exclusion``: owned nodes in the St-Venant zones of each contact sample's loads
+    (:mod:`flexnet_fe.shell.hotspot`), left out of the peaks and the history's maxima (not of
+    the envelope); None: no zones."""
     serial = model.V.mesh.comm.size == 1
     if backend is Backend.AUTO:
         backend = Backend.COMPILED if serial else Backend.PETSC
@@ -103,7 +110,8 @@ def run(model: ShellModel, loads: LoadHistory, R: RecoveryData, *, dt: float, n_
     go = _run_compiled if backend is Backend.COMPILED else _run_petsc
     return go(model, loads, R, dt=dt, n_steps=n_steps, sample_every=sample_every,
               frame_every=frame_every, alpha=alpha, beta=beta, growth_limit=growth_limit,
-              frame=frame or (lambda t, u: None), u0=u0)
+              frame=frame or (lambda t, u: None), u0=u0,
+              exclusion=exclusion or no_exclusion(len(loads.times)))
 
 
 class LocalFrame:
@@ -120,7 +128,8 @@ class LocalFrame:
         return (x.reshape(-1, NDOF_NODE) @ self.T).ravel()
 
 
-def step_data(model: ShellModel, loads: LoadHistory, frame: LocalFrame) -> kn.StepData:
+def step_data(model: ShellModel, loads: LoadHistory, frame: LocalFrame,
+              exclusion: Exclusion | None = None) -> kn.StepData:
     """The compiled kernel's inputs in the fin's local frame (K split into membrane and
     bending blocks, contact loads and frame accelerations rotated once)."""
     op = model.op
@@ -130,20 +139,22 @@ def step_data(model: ShellModel, loads: LoadHistory, frame: LocalFrame) -> kn.St
     P.eliminate_zeros()
     P.sort_indices()
     acc = np.ascontiguousarray(loads.accel, dtype=float).reshape(-1, 3) @ frame.T[:3, :3].T
+    ex = exclusion or no_exclusion(len(loads.times))
     return kn.StepData(K=kn.split_upper(op.Kb, frame.T), minv=op.minv, mass=op.mass,
                        mass_t=loads.mass_c.sum(axis=0),
                        times=np.asarray(loads.times, float), colptr=P.indptr.astype(np.int64),
                        rows=P.indices.astype(np.int64), vals=P.data.astype(float),
                        acc_times=np.asarray(loads.accel_times, float),
                        acc=np.ascontiguousarray(acc), wfix=op.wfix,
-                       normal=np.array([0.0, 0.0, 1.0]))
+                       normal=np.array([0.0, 0.0, 1.0]), xptr=ex.ptr.astype(np.int64),
+                       xnodes=ex.nodes.astype(np.int64))
 
 
 def _run_compiled(model, loads, R, *, dt, n_steps, sample_every, frame_every, alpha, beta,
-                  growth_limit, frame, u0) -> RunResult:
+                  growth_limit, frame, u0, exclusion) -> RunResult:
     op = model.op
     lf = LocalFrame(model.fin.plane)
-    D = step_data(model, loads, lf)
+    D = step_data(model, loads, lf, exclusion)
     RL = R._replace(e1=np.array([1.0, 0.0, 0.0]), e2=np.array([0.0, 1.0, 0.0]))
     Pm = kn.StepParams(dt=dt, alpha=alpha, beta=beta, growth_limit=growth_limit,
                        sample_every=sample_every)
@@ -176,13 +187,13 @@ def _run_compiled(model, loads, R, *, dt, n_steps, sample_every, frame_every, al
                      peak_vm=float(sc[kn.S_PEAK_VM]), peak_t=float(sc[kn.S_PEAK_T]),
                      peak_node=int(sc[kn.S_PEAK_NODE]), peak_p1=float(sc[kn.S_PEAK_P1]),
                      u_peak=lf.to_body(St.u_peak), steps=done, failed_at=int(failed),
-                     u=lf.to_body(St.u))
+                     u=lf.to_body(St.u), peak_raw=float(sc[kn.S_PEAK_RAW]))
 
 
 def _sample0(D, R, St, H, Pm):
     """History row 0 (t = 0) in the compiled path."""
     sc = St.scal
-    kn._sample(R, St, H, sc, 0, 0, 0.0)
+    kn._sample(D, R, St, H, 0, 0, 0.0)
     H.t[0] = 0.0
     H.ke[0] = 0.5 * float(D.mass @ (St.v * St.v))
     kn.split_product(D.K, St.u, St.y)
@@ -218,8 +229,24 @@ class ParallelSampler:
         return nodal_from_numerators(self.R, self.U.x.array, self.nodal, self.n_owned)
 
 
+def _masked_max(nodal: np.ndarray, exclusion: Exclusion, times: np.ndarray, t: float):
+    """(max vm, its node, max p1) over the owned nodes outside the St-Venant zones active at t
+    (as :func:`flexnet_fe.shell.kernel._mark_zones`); node −1 if none."""
+    keep = np.ones(len(nodal), bool)
+    n = len(times)
+    if n and times[0] <= t <= times[-1]:
+        k = min(int(np.searchsorted(times, t, side="right")) - 1, max(n - 2, 0))
+        keep[exclusion.nodes[exclusion.ptr[k]:exclusion.ptr[min(k + 2, n)]]] = False
+    vm = np.where(keep, nodal[:, :2].max(axis=1, initial=0.0), 0.0)
+    p1 = np.where(keep, nodal[:, 2:].max(axis=1, initial=-np.inf), -np.inf)
+    if not len(vm) or vm.max() <= 0.0:
+        return 0.0, -1, float(p1.max(initial=-np.inf))
+    node = int(np.argmax(vm))
+    return float(vm[node]), node, float(p1.max(initial=-np.inf))
+
+
 def _run_petsc(model, loads, R, *, dt, n_steps, sample_every, frame_every, alpha, beta,
-               growth_limit, frame, u0) -> RunResult:
+               growth_limit, frame, u0, exclusion) -> RunResult:
     from flexnet_fe.errors import NumericalError
 
     op = model.op
@@ -228,14 +255,16 @@ def _run_petsc(model, loads, R, *, dt, n_steps, sample_every, frame_every, alpha
     nn = op.n_owned // NDOF_NODE
     env = np.zeros((nn, 2))
     rows = {k: [] for k in ("t", "vm", "loc", "p1", "umax", "ke", "se", "work")}
-    peak = dict(vm=-1.0, t=0.0, node=-1, p1=-np.inf, step=-1, u=np.zeros(op.n_owned))
+    peak = dict(vm=-1.0, t=0.0, node=-1, p1=-np.inf, step=-1, u=np.zeros(op.n_owned), raw=0.0)
     last_peak_step, done, failed = -1, 0, 0
     last_u = np.zeros(op.n_owned)
     gen = central_difference(op, loads, dt, n_steps, sample_every, dt_crit=dt, alpha=alpha,
                              beta=beta, u0=u0, growth_limit=growth_limit)
     try:
         for smp in gen:
-            vmax, node, p1max, umax = sampler(smp.u)
+            vraw, _, _, umax = sampler(smp.u)
+            vmax, node, p1max = _masked_max(sampler.nodal, exclusion, loads.times, smp.t)
+            peak["raw"] = max(peak["raw"], comm.allreduce(vraw, op=MPI.MAX))
             np.maximum(env[:, 0], sampler.nodal[:, :2].max(axis=1), out=env[:, 0])
             np.maximum(env[:, 1], sampler.nodal[:, 2:].max(axis=1), out=env[:, 1])
             gv, owner = comm.allreduce((vmax, comm.rank), op=MPI.MAXLOC)
@@ -265,4 +294,4 @@ def _run_petsc(model, loads, R, *, dt, n_steps, sample_every, frame_every, alpha
                      umax=arr["umax"], ke=arr["ke"], se=arr["se"], work=arr["work"], env=env,
                      peak_vm=peak["vm"], peak_t=peak["t"], peak_node=peak["node"],
                      peak_p1=peak["p1"], u_peak=peak["u"], steps=done, failed_at=failed,
-                     u=last_u)
+                     u=last_u, peak_raw=peak["raw"])

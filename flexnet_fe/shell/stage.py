@@ -34,7 +34,8 @@ from flexnet_fe.shell.explicit import (Backend, LoadHistory, critical_step, max_
 from flexnet_fe.shell.forms import NDOF_NODE, ShellMaterial
 from flexnet_fe.shell.meshio import load_fin_mesh
 from flexnet_fe.shell.model import ShellModel, build_model
-from flexnet_fe.shell.recovery import locate_peak, stress_tensors, von_mises
+from flexnet_fe.shell import hotspot
+from flexnet_fe.shell.recovery import build_recovery, locate_peak, stress_tensors, von_mises
 from flexnet_fe.shell.solve import ParallelSampler, recovery_for, run
 from flexnet_fe.runs import ENVELOPE_XDMF, FIELDS_XDMF, HISTORY
 
@@ -100,6 +101,41 @@ def read_body_acceleration(path: Path | None) -> tuple[np.ndarray, np.ndarray]:
     if missing:
         raise CaseError(str(path), missing[0], "column missing")
     return h["t_s"], np.column_stack([h[c] for c in ACCEL_COLUMNS])
+
+
+class FinZones:
+    """The contact events of one fin and their St-Venant zones (:mod:`flexnet_fe.shell.hotspot`)."""
+
+    def __init__(self, model: ShellModel, contacts: FinContacts, fin_index: int, factor: float):
+        sel = np.flatnonzero(contacts.fin == fin_index)
+        self.times = contacts.t
+        self.sample = contacts.sample[sel]
+        self.points = contacts.point[sel]
+        self.forces = contacts.force[sel]
+        self.widths = contacts.width[sel]
+        self.radius = hotspot.exclusion_radius(model.material.thickness, self.widths, factor)
+        self.exclusion = hotspot.exclusion_nodes(model.op.x_nodes, self.sample, self.points,
+                                                 self.radius, len(contacts.t))
+
+    def active(self, t: float):
+        """(points (m, 3), radii (m,)) of the zones active at t [s]."""
+        return hotspot.excluded_points(self.times, t, self.sample, self.points, self.radius)
+
+    def bearing(self, model: ShellModel, rope_modulus: float) -> hotspot.Bearing:
+        """Largest closed-form bearing/contact stress of the fin's events."""
+        if not len(self.points):
+            return hotspot.Bearing(0.0, 0.0, "", None, 0.0)
+        from flexnet_fe.shell.transfer import _boundary_segments, _nearest_on_boundary
+        pl = model.fin.plane
+        fg = FinGeometry(mesh=model.V.mesh, V=model.V, origin=pl.origin, e1=pl.e1, e2=pl.e2,
+                         n=pl.n)
+        segs = _boundary_segments(fg)  # collective: every rank calls it
+        rel = self.points - pl.origin
+        dist = _nearest_on_boundary(segs, np.column_stack([rel @ pl.e1, rel @ pl.e2]))[1]
+        mat = model.material
+        e_star = hotspot.contact_modulus(mat.youngs_modulus, mat.poisson_ratio, rope_modulus)
+        return hotspot.bearing_stress(self.times[self.sample], self.points, self.forces,
+                                      self.widths, dist, pl.n, mat.thickness, e_star)
 
 
 def fin_load_history(model: ShellModel, contacts: FinContacts, fin_index: int,
@@ -223,24 +259,50 @@ def _time_steps(model: ShellModel, shell: ShellConfig, end_time: float, log, nam
     return dt_crit, dt, n_steps, every, field_every, dofs
 
 
-def _peak(model: ShellModel, R, res, writer: _FieldWriter):
-    """Located peak (value, location, surface, ZZ error estimate) on the rank owning it."""
+def _whole_fin(model: ShellModel, R, u_owned: np.ndarray, node: int):
+    """(recovery data, state (frame B), peak node, node coordinates) of the whole fin on rank 0
+    (None elsewhere): under MPI the owned parts are gathered, so that the peak is located with
+    every cell around its node — the same search as a serial run."""
     comm = model.V.mesh.comm
-    owner = comm.allreduce(comm.rank if res.peak_node >= 0 else comm.size, op=MPI.MIN)
-    if owner >= comm.size or res.peak_vm <= 0.0:
+    x = model.V.tabulate_dof_coordinates()
+    if comm.size == 1:
+        return R, u_owned, node, x
+    imap = model.V.dofmap.index_map
+    nloc = imap.size_local
+    gl = imap.local_to_global(np.arange(nloc + imap.num_ghosts, dtype=np.int32)).astype(np.int64)
+    parts = comm.gather((gl[R.cells], gl[:nloc], x[:nloc], u_owned.reshape(-1, NDOF_NODE),
+                         int(gl[node]) if node >= 0 else -1), root=0)
+    if comm.rank != 0:
         return None
-    U = writer.sampler.U
-    U.x.array[: res.u_peak.size] = res.u_peak
-    U.x.scatter_forward()
+    n = imap.size_global
+    xg, ug = np.zeros((n, 3)), np.zeros((n, NDOF_NODE))
+    for _, g, xp, up, _ in parts:
+        xg[g], ug[g] = xp, up
+    cells = np.concatenate([p[0] for p in parts])
+    pl, mat = model.fin.plane, model.material
+    Rg = build_recovery(cells, xg, n, pl.e1, pl.e2, pl.origin,
+                        (mat.plane_stress_modulus, mat.poisson_ratio, mat.thickness))
+    return Rg, ug.ravel(), max(p[4] for p in parts), xg
+
+
+def _peak(model: ShellModel, R, res, zones: FinZones | None):
+    """Located structural peak (value, location, surface, ZZ error estimate), searched outside
+    the St-Venant zones active at the peak's instant; the same on every rank."""
+    comm = model.V.mesh.comm
+    if comm.allreduce(res.peak_node, op=MPI.MAX) < 0 or res.peak_vm <= 0.0:
+        return None
+    whole = _whole_fin(model, R, res.u_peak, res.peak_node)
     pk = None
-    if comm.rank == owner:
-        x = model.V.tabulate_dof_coordinates()
-        pk = locate_peak(R, U.x.array, res.peak_node, x, model.fin.plane.origin)
-    return comm.bcast(pk, root=owner)
+    if whole is not None:
+        Rg, u, node, x = whole
+        excl = zones.active(res.peak_t) if zones is not None else None
+        pk = locate_peak(Rg, u, node, x, model.fin.plane.origin, exclude=excl)
+    return comm.bcast(pk, root=0)
 
 
 def solve_fin(model: ShellModel, loads: LoadHistory, shell: ShellConfig, end_time: float,
-              out_dir: Path, log: logging.Logger, *, name: str) -> dict:
+              out_dir: Path, log: logging.Logger, *, name: str,
+              zones: FinZones | None = None) -> dict:
     """Run one fin to ``end_time`` [s]; write history.csv, fields.xdmf (frames every
     ``field_interval`` plus the running peak's instants), envelope.xdmf in ``out_dir``; return
     the fin's summary (peaks with their error estimate, dt, dt_crit, dofs, steps)."""
@@ -262,8 +324,9 @@ def solve_fin(model: ShellModel, loads: LoadHistory, shell: ShellConfig, end_tim
         res = run(model, loads, R, dt=dt, n_steps=n_steps, sample_every=every,
                   frame_every=field_every, alpha=shell.rayleigh_alpha, beta=shell.rayleigh_beta,
                   growth_limit=shell.energy_growth_limit, frame=frame,
-                  backend=Backend(shell.backend))
-    pk = None if res.failed_at else _peak(model, R, res, writer)
+                  backend=Backend(shell.backend),
+                  exclusion=zones.exclusion if zones is not None else None)
+    pk = None if res.failed_at else _peak(model, R, res, zones)
     vm, loc = res.vm.copy(), res.loc.copy()
     if pk is not None:  # the peak row carries the located peak (≥ its nodal value)
         i = int(np.argmax(res.vm))
@@ -288,6 +351,9 @@ def solve_fin(model: ShellModel, loads: LoadHistory, shell: ShellConfig, end_tim
            "peak_surface": pk.surface if pk else None,
            "peak_error_estimate_rel": pk.error_estimate_rel if pk else 0.0,
            "peak_nodal_von_mises_pa": max(res.peak_vm, 0.0),
+           "peak_von_mises_with_load_zones_pa": res.peak_raw,
+           "stvenant_radius_m": (float(zones.radius.max(initial=0.0)) if zones is not None
+                                 else 0.0),
            "peak_max_principal_pa": res.peak_p1,
            "allowable_pa": mat.yield_strength,
            "peak_over_allowable": float(vm.max(initial=0.0)) / mat.yield_strength,
@@ -322,6 +388,27 @@ def select_fins(shell: ShellConfig, fins: list[FinSpec], contacts: FinContacts) 
     return [f for f in fins if f.name in loaded]
 
 
+def _fin_mesh_path(shell: ShellConfig, spec: FinSpec, contacts: FinContacts, idx: int,
+                   stage_dir: Path, comm) -> Path:
+    """The fin's mesh: as given, or (``shell.local_mesh_size``) re-meshed with that element size
+    within r_ex + 2 local sizes of the fin's contact points, written to
+    ``stage_dir/<fin>/mesh.msh`` (rank 0)."""
+    pts = contacts.point[contacts.fin == idx] if idx >= 0 else np.zeros((0, 3))
+    if shell.local_mesh_size is None or shell.load is not None or not len(pts):
+        return spec.mesh_path
+    from flexnet_fe.missile.mesh import fin_outline_from_msh, write_refined_fin_mesh
+    widths = contacts.width[contacts.fin == idx]
+    radius = float(hotspot.exclusion_radius(spec.thickness, widths,
+                                            max(shell.stvenant_radius_factor, 1.0)).max())
+    path = Path(stage_dir) / spec.name / "mesh.msh"
+    if comm.rank == 0:
+        corners, h = fin_outline_from_msh(spec.mesh_path)
+        write_refined_fin_mesh(corners, max(h, shell.local_mesh_size), pts,
+                               shell.local_mesh_size, radius + 2.0 * shell.local_mesh_size, path)
+    comm.barrier()
+    return path
+
+
 def run_shell(shell: ShellConfig, fins: list[FinSpec], contacts_npz: Path,
               collide_history_csv: Path | None, stage_dir: Path, log: logging.Logger,
               comm: MPI.Comm = MPI.COMM_WORLD) -> dict:
@@ -352,7 +439,9 @@ def run_shell(shell: ShellConfig, fins: list[FinSpec], contacts_npz: Path,
     warnings: list[str] = []
     dts, dtcs, dofs, steps = [], [], 0, 0
     for spec in select_fins(shell, fins, contacts):
-        fin_mesh = load_fin_mesh(spec.mesh_path, comm)
+        idx = contacts.fin_names.index(spec.name) if spec.name in contacts.fin_names else -1
+        fin_mesh = load_fin_mesh(_fin_mesh_path(shell, spec, contacts, idx, stage_dir, comm),
+                                 comm)
         mat = ShellMaterial(thickness=spec.thickness, youngs_modulus=spec.youngs_modulus,
                             poisson_ratio=spec.poisson_ratio, density=spec.density,
                             yield_strength=spec.yield_strength,
@@ -362,17 +451,30 @@ def run_shell(shell: ShellConfig, fins: list[FinSpec], contacts_npz: Path,
         if shell.load is not None:
             loads = pressure_history(model, shell.load.times, shell.load.pressure)
         else:
-            idx = contacts.fin_names.index(spec.name) if spec.name in contacts.fin_names else -1
             loads = fin_load_history(model, contacts, idx, acc_t, acc)
+        zones = FinZones(model, contacts, idx, shell.stvenant_radius_factor)
         res = solve_fin(model, loads, shell, end_time, Path(stage_dir) / spec.name, log,
-                        name=spec.name)
+                        name=spec.name, zones=zones)
+        b = zones.bearing(model, shell.bearing_rope_modulus)
+        allow_b = shell.bearing_allowable_factor * spec.yield_strength
+        res.update(local_mesh_size_m=shell.local_mesh_size, h_min_m=model.h_min,
+                   peak_bearing_pa=b.peak_pa, peak_bearing_time_s=b.time_s,
+                   peak_bearing_kind=b.kind, peak_bearing_location_m=b.location_m,
+                   peak_bearing_force_n=b.force_n, bearing_allowable_pa=allow_b,
+                   bearing_over_allowable=b.peak_pa / allow_b)
+        if b.peak_pa > allow_b:
+            warnings.append(
+                f"shell {spec.name}: local bearing/contact stress {b.peak_pa / 1e6:.4g} MPa "
+                f"({b.kind} load {b.force_n / 1e3:.3g} kN at {1e3 * b.time_s:.4g} ms, closed "
+                f"form) exceeds the bearing allowable {allow_b / 1e6:.4g} MPa "
+                f"({shell.bearing_allowable_factor:g} x yield): the fin is crushed there")
         summary[spec.name] = res
         if res["peak_error_estimate_rel"] > shell.peak_error_tolerance:
             warnings.append(
                 f"shell {spec.name}: peak von Mises {res['peak_von_mises_pa'] / 1e6:.4g} MPa has "
                 f"an estimated error of {100 * res['peak_error_estimate_rel']:.3g} % (> "
                 f"{100 * shell.peak_error_tolerance:.3g} %, shell.peak_error_tolerance): refine "
-                f"the fin mesh")
+                f"the fin mesh at the loads (shell.local_mesh_size)")
         dts.append(res["dt_s"])
         dtcs.append(res["dt_crit_s"])
         dofs += res["dofs"]

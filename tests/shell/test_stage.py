@@ -77,7 +77,9 @@ def test_stage_outputs(tmp_path):
     assert w["peak_time_s"] == h["t_s"][i]
     assert w["peak_von_mises_pa"] >= w["peak_nodal_von_mises_pa"] * (1 - 1e-12)
     np.testing.assert_allclose(w["peak_location_m"], [h[f"max_von_mises_{c}_m"][i] for c in "xyz"])
-    assert 1e6 < w["peak_von_mises_pa"] < 1e10 and w["peak_max_principal_pa"] > 0
+    # (the magnitude of a stage peak is checked against the Navier series in
+    # test_shell_load_option_runs_a_pressure_history_on_a_fin)
+    assert w["peak_max_principal_pa"] > 0
     assert w["allowable_pa"] == 503e6 and 0 < w["peak_error_estimate_rel"] < 1
     assert isinstance(s["warnings"], list)
     os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
@@ -121,8 +123,17 @@ def test_blow_up_is_caught_and_keeps_earlier_output(tmp_path, monkeypatch):
 @pytest.mark.mpi
 def test_two_processes_give_the_same_history(tmp_path):
     fins = make_inputs(tmp_path)
-    run_shell(CFG, fins, tmp_path / "fin_contacts.npz", tmp_path / "history.csv",
-              tmp_path / "serial", _log())
+    # zones of 20 max(t, d) = 0.1 m (the loads are 80 mm from the root): while the rope load
+    # acts, the sampled maxima leave out nodes (checked against a run without zones), and both
+    # paths must leave out the same ones (the masked PETSc path is exercised)
+    cfg = CFG.model_copy(update={"stvenant_radius_factor": 20.0})
+    ser = run_shell(cfg, fins, tmp_path / "fin_contacts.npz", tmp_path / "history.csv",
+                    tmp_path / "serial", _log())
+    run_shell(cfg.model_copy(update={"stvenant_radius_factor": 0.0}), fins,
+              tmp_path / "fin_contacts.npz", tmp_path / "history.csv", tmp_path / "nozone", _log())
+    h0 = read_history_csv(tmp_path / "nozone" / "wing" / "history.csv")["max_von_mises_pa"]
+    h1 = read_history_csv(tmp_path / "serial" / "wing" / "history.csv")["max_von_mises_pa"]
+    assert np.all(h1 <= h0 * (1 + 1e-12)) and np.any(h1 < 0.9 * h0)
     script = tmp_path / "par.py"
     script.write_text(textwrap.dedent(f"""
         import logging, sys
@@ -133,9 +144,12 @@ def test_two_processes_give_the_same_history(tmp_path):
         d = Path({str(tmp_path)!r})
         fins = [FinSpec(n, d / f"{{n}}.msh", 4e-3, 71.7e9, 0.33, 2810.0, 503e6)
                 for n in ("wing", "rudder")]
-        cfg = ShellConfig.model_validate_json({CFG.model_dump_json()!r})
-        run_shell(cfg, fins, d / "fin_contacts.npz", d / "history.csv", d / "parallel",
-                  logging.getLogger("par"))
+        cfg = ShellConfig.model_validate_json({cfg.model_dump_json()!r})
+        s = run_shell(cfg, fins, d / "fin_contacts.npz", d / "history.csv", d / "parallel",
+                      logging.getLogger("par"))
+        import json
+        if __import__("mpi4py").MPI.COMM_WORLD.rank == 0:
+            (d / "par.json").write_text(json.dumps(s["wing"]))
     """))
     res = subprocess.run(["mpirun", "--oversubscribe", "--allow-run-as-root", "-n", "2", str(PY),
                           str(script)], capture_output=True, text=True, timeout=600,
@@ -149,6 +163,13 @@ def test_two_processes_give_the_same_history(tmp_path):
         # summation order differs, so histories agree to round-off; bound 1e-10 (issue 10).
         scale = np.nanmax(np.abs(a[k])) or 1.0
         np.testing.assert_allclose(b[k], a[k], rtol=0, atol=1e-10 * scale, err_msg=k)
+    # the located peak (gathered to rank 0 under MPI) and its ZZ estimate are the serial ones
+    import json
+    par = json.loads((tmp_path / "par.json").read_text())
+    w = ser["wing"]
+    np.testing.assert_allclose(par["peak_location_m"], w["peak_location_m"], rtol=0, atol=1e-12)
+    assert par["peak_error_estimate_rel"] == pytest.approx(w["peak_error_estimate_rel"], rel=1e-8)
+    assert par["peak_bearing_pa"] == pytest.approx(w["peak_bearing_pa"], rel=1e-12)
 
 
 def test_runs_on_the_missile_meshers_fin(tmp_path):
@@ -199,5 +220,21 @@ def test_shell_load_option_runs_a_pressure_history_on_a_fin(tmp_path):
     ref = api.solve(m, api.pressure(m, load["times"], load["pressure"]), 6e-4)
     assert s["plate"]["peak_von_mises_pa"] == pytest.approx(ref.peak.value, rel=1e-9)
     assert s["plate"]["peak_time_s"] == pytest.approx(ref.run.peak_t, rel=1e-12)
+    # Independent reference: the Navier series of the same simply supported plate (hard support,
+    # κ = 5/6, rotary inertia ×4), exact for the piecewise-linear pulse: peak surface von Mises
+    # over the stage's sample times and an 11 × 11 grid of a quarter plate (the peak is central).
+    # The plate-series study (docs/validation.md) measured −7.4 % at 12² with O(h²)
+    # convergence; the ZZ estimate is validated there as an upper bound of that error.
+    # Measured here: −6.1 %, ZZ estimate 9.2 %.
+    from flexnet_fe.shell import navier
+    from flexnet_fe.shell.recovery import von_mises
+    t_s = read_history_csv(tmp_path / "out" / "plate" / "history.csv")["t_s"]
+    plate = navier.PlateData(0.2, 0.2, 2e-3, 70e9, 0.3, 2700.0, rotary_scale=4.0)
+    amps = navier.transient_amplitudes(plate, 61, t_s, load["times"], load["pressure"])
+    g = np.linspace(0.0, 0.1, 11)
+    X, Y = (v.ravel() for v in np.meshgrid(g, g))
+    vm_ref = von_mises(navier.fields(plate, amps, X, Y)[1]).max()
+    err = s["plate"]["peak_von_mises_pa"] / vm_ref - 1.0
+    assert abs(err) < 0.10 and abs(err) <= s["plate"]["peak_error_estimate_rel"], (err, vm_ref)
     with pytest.raises(ValidationError, match="supports"):
         ShellConfig(supports={"root": "glued"})
