@@ -52,8 +52,6 @@ WIDE_KERNELS: dict[str, str] = {
     "flexnet_fe.collide.rigid_body:rigid_step": "helper A",
     "flexnet_fe.collide.rigid_body:integrate_rigid": "helper A",
     "flexnet_fe.collide.kernel:_apply_to_node": "helper A (added in 1e91cf6, 9 positional)",
-    "flexnet_fe.shell.kernel:node_update": "helper B",
-    "flexnet_fe.shell.explicit:_update": "helper B",
 }
 
 UPWARD_IMPORTS: dict[tuple[str, str], str] = {
@@ -74,8 +72,6 @@ FILE_NAME_LITERALS: dict[tuple[str, str], str] = {
 }
 
 TWIN_FUNCTIONS: dict[frozenset, str] = {
-    frozenset({"flexnet_fe.shell.recovery:shape_q1", "flexnet_fe.shell.transfer:_shape_q1"}):
-        "helper B: one Q1 shape function for recovery and load transfer",
 }
 MIN_TWIN_NODES = 40
 """Smallest body (AST nodes) counted as a twin: about four lines of arithmetic."""

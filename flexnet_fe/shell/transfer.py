@@ -33,6 +33,7 @@ from scipy import sparse
 
 from flexnet_fe.shell.forms import NDOF_NODE  # (u_x, u_y, u_z, θ_1, θ_2); forces load the first 3
 from flexnet_fe.shell.mass import min_edge_length
+from flexnet_fe.shell.recovery import shape_q1
 
 
 def disk_stencil(n_rings: int, n_phi: int) -> np.ndarray:
@@ -68,19 +69,13 @@ class FinGeometry:
     n: np.ndarray
 
 
-def _shape_q1(xi: np.ndarray, eta: np.ndarray) -> np.ndarray:
-    """Bilinear shape functions on [0,1]² in dolfinx/basix vertex order
-    (0,0), (1,0), (0,1), (1,1); returns shape (len(xi), 4)."""
-    return np.column_stack([(1 - xi) * (1 - eta), xi * (1 - eta), (1 - xi) * eta, xi * eta])
-
-
 def _pull_back(xc: np.ndarray, y: np.ndarray, iters: int = 12) -> np.ndarray:
     """Reference coordinates (ξ, η) of 2-D points ``y`` (m, 2) in bilinear cells with 2-D vertex
     coordinates ``xc`` (m, 4, 2) by Newton's method. Returns (m, 2)."""
     X = np.full((len(y), 2), 0.5)
     for _ in range(iters):
         xi, eta = X[:, 0], X[:, 1]
-        N = _shape_q1(xi, eta)
+        N = shape_q1(xi, eta)
         r = np.einsum("mi,mij->mj", N, xc) - y
         dxi = np.column_stack([-(1 - eta), 1 - eta, -eta, eta])
         deta = np.column_stack([-(1 - xi), -xi, 1 - xi, xi])
@@ -261,7 +256,7 @@ def _assemble(fg: FinGeometry, ev: np.ndarray, w: np.ndarray, cl: np.ndarray, Xa
     """G (local rows incl. ghosts, 3·ne) from quadrature points: event ``ev`` (q,), weight ``w``
     (q,), cell ``cl`` (q,) and reference coordinates ``Xa`` (q, 2) — Q1 shape functions times
     the weight on the three translational DOFs of the cell's four nodes."""
-    N = _shape_q1(Xa[:, 0], Xa[:, 1])  # (m, 4)
+    N = shape_q1(Xa[:, 0], Xa[:, 1])  # (m, 4)
     V = fg.V
     dm = V.dofmap.list.array.reshape(-1, 4)
     blocks = dm[cl]  # (m, 4) local node blocks, basix P1 order = vertex order
@@ -306,7 +301,7 @@ def locate_in_cells(fg: FinGeometry, points: np.ndarray, weights: np.ndarray,
         k = int(np.flatnonzero(~found)[0])
         raise ValueError(f"load point {points[k]} m lies outside the fin")
     cl, Xa, w = cell[mine], X[mine], np.asarray(weights, dtype=float)[mine]
-    N = _shape_q1(Xa[:, 0], Xa[:, 1])
+    N = shape_q1(Xa[:, 0], Xa[:, 1])
     V = fg.V
     blocks = V.dofmap.list.array.reshape(-1, 4)[cl]
     rows = (blocks[:, :, None] * NDOF_NODE + np.arange(3)[None, None, :]).ravel()
