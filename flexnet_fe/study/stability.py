@@ -184,39 +184,12 @@ def contact_map(ctx: Context) -> list[dict]:
 
 # -- damping: restitution achieved against requested -----------------------------------------
 
-def restitution_achieved(model_code: int, e_req: float, v: float, v_floor: float = 1.0,
-                         k_n: float = 1e9, exponent: float = 1.5, mass: float = 0.01) -> float:
-    """v_out / v_in of a point mass ``mass`` [kg] hitting a rigid wall at ``v`` [m/s] under
-    F = K δ^m (1 + χ δ̇) (contact.law.normal_force), χ from ``hysteresis_factor`` with the
-    kernel's v_k rule (largest approach speed, at least ``v_floor``). RK4 with 4000 steps over
-    the undamped Hertz contact time 3.22 δ_max / v (δ_max = (5 m v² / 4K)^(2/5))."""
-    from flexnet_fe.contact.law import hysteresis_factor, normal_force
-
-    chi = hysteresis_factor(model_code, e_req, max(v, v_floor))
-    dmax = (5.0 * mass * v * v / (4.0 * k_n)) ** 0.4 if exponent == 1.5 else 1e-3
-    dt = 3.22 * dmax / v / 4000.0
-
-    def acc(delta, rate):
-        return -normal_force(delta, rate, k_n, exponent, chi) / mass
-
-    x, u = 0.0, v  # x = δ (penetration), u = δ̇
-    for _ in range(400000):
-        k1x, k1u = u, acc(x, u)
-        k2x, k2u = u + 0.5 * dt * k1u, acc(x + 0.5 * dt * k1x, u + 0.5 * dt * k1u)
-        k3x, k3u = u + 0.5 * dt * k2u, acc(x + 0.5 * dt * k2x, u + 0.5 * dt * k2u)
-        k4x, k4u = u + dt * k3u, acc(x + dt * k3x, u + dt * k3u)
-        x += dt / 6.0 * (k1x + 2 * k2x + 2 * k3x + k4x)
-        u += dt / 6.0 * (k1u + 2 * k2u + 2 * k3u + k4u)
-        if x <= 0.0 and u < 0.0:
-            return -u / v
-    return math.nan
-
-
 def damping_map(ctx: Context) -> list[dict]:
     """Restitution achieved by Hunt–Crossley, Lankarani–Nikravesh and Flores across impact
     speeds and requested e. No solver guard exists for this: a |e_achieved − e| > 0.05 is
     reported as a model limitation that reaches the results unflagged."""
     from flexnet_fe.contact.law import DAMPING_CODE, DampingModel
+    from flexnet_fe.contact.restitution import restitution_achieved
 
     rows = []
     speeds = (0.3, 10.0, 500.0) if ctx.quick else (0.1, 0.3, 1.0, 10.0, 100.0, 500.0, 1000.0)

@@ -1,4 +1,4 @@
-"""The damping map's two-body integration (flexnet_fe.study.stability.restitution_achieved)
+"""The damping map's two-body integration (flexnet_fe.contact.restitution.restitution_achieved)
 against closed-form limits, so that the map's "achieved restitution" can be trusted."""
 
 from __future__ import annotations
@@ -6,7 +6,7 @@ from __future__ import annotations
 import pytest
 
 from flexnet_fe.contact.law import DAMPING_CODE, DampingModel
-from flexnet_fe.study.stability import restitution_achieved
+from flexnet_fe.contact.restitution import restitution_achieved
 
 
 @pytest.mark.parametrize("v", [0.3, 10.0, 500.0])
