@@ -8,7 +8,7 @@ modulus, and the kernel cost per spring-step.
 
 Each case is deployed once (its [deploy] table) into DIR/<case>/deploy — or the deploy stage of an
 existing run directory DEPLOY_ROOT/<case>/deploy is used — then collided with the case's tables:
-the case's dt × each scale; each rope subdivision k near the flight path (``subdivide_near_path``)
+the case's dt × each scale (at the case's rope_split); each rope subdivision k near the flight path
 at the case's dt rule; each transverse modulus at the case's dt rule. Every run's headline numbers
 (CFC-filtered peak |a|, Δv/v, impulse per fin, contact duration, outcome, energy error) are printed
 as they arrive and written as a markdown table to --doc (rewritten after each group), with the
@@ -25,17 +25,14 @@ import tempfile
 import time
 from pathlib import Path
 
-import numpy as np
 
 from flexnet_fe.atmosphere import isa
-from flexnet_fe.collide.crop import free_nodes
-from flexnet_fe.collide.scene import HeldNet, held_net, missile_attitude, shape_bbox
+from flexnet_fe.collide.scene import held_net
 from flexnet_fe.collide.simulate import simulate
 from flexnet_fe.config import load_case
 from flexnet_fe.errors import NumericalError
 from flexnet_fe.missile.build import build_missile
 from flexnet_fe.net.deploy import run_deploy
-from flexnet_fe.net.topology import segment_damping
 
 ROOT = Path(__file__).resolve().parents[1]
 CASES = ("radar_traction", "radar_rotary", "infrared_traction")
@@ -54,55 +51,6 @@ def _row(label, s, ref=None) -> str:
             f"{s['impulse_ns']:.4g} | {fin_txt} | {s['duration_s'] * 1e3:.3g} | "
             f"{'passed' if s['passed_through'] else 'carried/contact'} | {s['energy_error_rel']:.2%} | "
             f"{s['max_penetration_ratio']:.2f} | {s['steps']} | {s['wall_s']:.1f} | {rel} |")
-
-
-def subdivide_near_path(net: HeldNet, missile, cfg, k: int, margin: float, zeta: float) -> HeldNet:
-    """The held net with every rope segment near the flight path split into ``k`` equal segments
-    (convergence under rope subdivision near the contact; k = 1 returns ``net``).
-
-    Near = both end nodes within r_max + ``margin`` [m] of the line through the aim point along the
-    flight direction (r_max: the missile's bounding radius incl. fins). Hub links are not split.
-    Each split segment keeps E·A and its straight held geometry (new nodes on the chord, at rest);
-    rest length and slack offset are divided by k; its rope mass ρ A l0 (Eq. (2) lumping) is
-    re-lumped: the two old end nodes lose (1/2 − 1/(2k)) of it, each of the k − 1 new nodes gets
-    1/k. Dashpots follow Eq. (4) for the new pieces (c = 2 ζ √(μ K), μ the reduced end mass)."""
-    if k == 1:
-        return net
-    m = net.model
-    d = missile_attitude(cfg.incidence_angle, cfg.roll_angle)[:, 0]
-    aim = np.array([cfg.aim_point[0], cfg.aim_point[1], 0.0])
-    near = free_nodes(net.x, aim, d, float(shape_bbox(missile)[2]) + margin)
-    split = near[m.springs[:, 0]] & near[m.springs[:, 1]] & ~m.hub_link
-    idx = np.flatnonzero(split)
-    keep = np.flatnonzero(~split)
-    n0, ns = m.n_nodes, idx.size
-    seg_mass = net.rope.density * 0.25 * np.pi * net.rope.diameter**2 * m.rest_length[idx]
-    mass = np.array(m.mass, dtype=np.float64)
-    np.add.at(mass, m.springs[idx, 0], -(0.5 - 0.5 / k) * seg_mass)
-    np.add.at(mass, m.springs[idx, 1], -(0.5 - 0.5 / k) * seg_mass)
-    new_id = n0 + np.arange(ns * (k - 1)).reshape(ns, k - 1)
-    chain = np.column_stack([m.springs[idx, 0], new_id, m.springs[idx, 1]])  # (ns, k + 1)
-    frac = (np.arange(1, k) / k)[None, :, None]
-    xa, xb = net.x[m.springs[idx, 0]][:, None, :], net.x[m.springs[idx, 1]][:, None, :]
-    x_new = (xa + frac * (xb - xa)).reshape(-1, 3)
-    x0a, x0b = m.x0[m.springs[idx, 0]][:, None, :], m.x0[m.springs[idx, 1]][:, None, :]
-    x0_new = (x0a + frac * (x0b - x0a)).reshape(-1, 3)
-    mass = np.concatenate([mass, np.repeat(seg_mass / k, k - 1)])
-    springs_new = np.stack([chain[:, :-1], chain[:, 1:]], axis=-1).reshape(-1, 2)
-    rep = lambda a: np.repeat(np.asarray(a)[idx], k)  # noqa: E731 — per-piece copy of a segment field
-    rest_new = rep(m.rest_length) / k
-    ea_new = rep(m.stiffness_ea)
-    c_new = segment_damping(ea_new / rest_new, mass[springs_new[:, 0]], mass[springs_new[:, 1]], zeta)
-    cat = lambda a, b: np.concatenate([np.asarray(a)[keep], b])  # noqa: E731
-    model = dataclasses.replace(
-        m, x0=np.concatenate([m.x0, x0_new]), v0=np.concatenate([m.v0, np.zeros_like(x0_new)]), mass=mass,
-        springs=cat(m.springs, springs_new).astype(np.int64), rest_length=cat(m.rest_length, rest_new),
-        stiffness_ea=cat(m.stiffness_ea, ea_new), damping=cat(m.damping, c_new),
-        slack_offset=cat(m.slack_offset, rep(m.slack_offset) / k), diameter=cat(m.diameter, rep(m.diameter)),
-        drag_free=np.concatenate([m.drag_free, np.zeros(ns * (k - 1), dtype=bool)]),
-        hub_link=cat(m.hub_link, np.zeros(ns * k, dtype=bool)), anchor_angle=cat(m.anchor_angle, np.zeros(ns * k)))
-    rest_held = cat(net.rest_length, rep(net.rest_length) / k)
-    return dataclasses.replace(net, model=model, x=np.concatenate([net.x, x_new]), rest_length=rest_held)
 
 
 def _run(net, missile, cfg, air, log, **kw):
@@ -156,9 +104,9 @@ def main() -> None:
         subs = [int(x) for x in args.subdivide.split(",") if x]
         sub_runs = {}
         for k in subs:
-            fine = subdivide_near_path(net, missile, case.collide, k, args.sub_margin, case.net.damping_ratio)
-            sub_runs[k] = runs.get(1.0) if k == 1 and 1.0 in runs else _run(fine, missile, case.collide, air, log,
-                                                                              n_snapshots=2)
+            cfg_k = case.collide.model_copy(update={"rope_split": k, "rope_split_margin": args.sub_margin})
+            reuse = k == case.collide.rope_split and args.sub_margin == case.collide.rope_split_margin and 1.0 in runs
+            sub_runs[k] = runs[1.0] if reuse else _run(net, missile, cfg_k, air, log, n_snapshots=2)
             print(_row(f"{name}, rope split k = {k}", sub_runs[k]), flush=True)
         if subs:
             lines += [_row(f"{name}, rope split k = {k} near the path, case dt (vs k = {max(subs)})", sub_runs[k],

@@ -17,20 +17,19 @@ from flexnet_fe.missile.shapes import (body_closest_point, body_closest_scalar, 
 
 
 @njit(cache=True)
-def loop_point(pts, s0, s1, s2, s3, s4, s5, s6, s7, s8):
+def loop_point(pts, shapes):
     acc = 0.0
     for k in range(pts.shape[0]):
-        d, n, q, part = closest_point(pts[k], s0, s1, s2, s3, s4, s5, s6, s7, s8)
+        d, n, q, part = closest_point(pts[k], shapes)
         acc += d + n[0] + q[0] + part
     return acc
 
 
 @njit(cache=True)
-def loop_point_scalar(pts, s0, s1, s2, s3, s4, s5, s6, s7, s8):
+def loop_point_scalar(pts, shapes):
     acc = 0.0
     for k in range(pts.shape[0]):
-        d, nx, ny, nz, qx, qy, qz, part = closest_point_scalar(pts[k], s0, s1, s2, s3, s4, s5,
-                                                               s6, s7, s8)
+        d, nx, ny, nz, qx, qy, qz, part = closest_point_scalar(pts[k], shapes)
         acc += d + nx + qx + part
     return acc
 
@@ -93,8 +92,8 @@ def main():
         near = near + rng.normal(scale=0.01, size=near.shape)
         seg_b = box + rng.normal(scale=0.05, size=box.shape)
         for label, pts in (("box", box), ("near-surface", near)):
-            t_p = best_of(loop_point, pts, *S)
-            t_ps = best_of(loop_point_scalar, pts, *S)
+            t_p = best_of(loop_point, pts, S)
+            t_ps = best_of(loop_point_scalar, pts, S)
             t_b = best_of(loop_body, pts, *S[:3])
             t_bs = best_of(loop_body_scalar, pts, *S[:3])
             print(f"{preset} {label}: closest_point {t_p / n * 1e9:.0f} ns, "

@@ -49,7 +49,16 @@ class CollideConfig(Section):
     aim_point: tuple[float, float] = Field((0.0, 0.0),
                                            description="world (x, y) where the missile axis meets the net centre plane z = 0 [m]")
     standoff: Positive = Field(0.02, description="initial gap between nose apex and the nearest net point along the path [m]")
-    duration: Positive = Field(0.012, description="simulated time [s] (paper: impact lasts < 10 ms)")
+    duration: Positive = Field(0.012, description=(
+        "simulated time [s] (paper: impact lasts < 10 ms); the run goes on past it while the interaction "
+        "is not over, up to max_duration (end rule: collide.simulate)"))
+    max_duration: Positive | None = Field(None, description=(
+        "longest simulated time [s]: after `duration` the run continues until the contact has ended and the "
+        "missile's tail is end_clearance past every free net node, or this cap is reached (a warning says "
+        "whether force was still acting); None = duration (no extension)"))
+    end_clearance: NonNegative = Field(0.1, description=(
+        "distance [m] by which the missile's tail must be past the free net nodes, with no contact in the last "
+        "output interval, for the interaction to count as over"))
     gravity: bool = Field(False, description="apply gravity -g ŷ (ISA g at the altitude) to net and missile")
 
     contact_exponent: float = Field(1.5, ge=1.0, le=2.0, description="exponent m of Eq. (28) [-] (Hertz: 1.5)")
@@ -65,6 +74,12 @@ class CollideConfig(Section):
         0.1, description="v_reg of tanh(|v_t|/v_reg) replacing sign(v_t) in Eq. (32) [m/s]")
     stiffness_rule: StiffnessRule = Field(StiffnessRule.hertz_eq30, description="rule for the contact stiffness K")
     contact_stiffness: Positive | None = Field(None, description="K for stiffness_rule = 'given' [N/m^m]")
+    rope_split: int = Field(1, ge=1, le=64, description=(
+        "split every rope segment whose both ends lie within rope_split_margin of the missile's swept volume "
+        "into this many equal segments at collision start (collide.refine; 1 = the deployed net as it is) [-]"))
+    rope_split_margin: NonNegative = Field(0.2, description=(
+        "distance beyond the missile's bounding radius around the flight path within which rope segments "
+        "are split (rope_split) [m]"))
     allow_tunnelling: bool = Field(False, description=(
         "finish a run in which a rope centre line reaches a part's core (the rope passes through) and "
         "report the skipped impulse, instead of stopping"))
@@ -84,10 +99,19 @@ class CollideConfig(Section):
 
     @model_validator(mode="after")
     def _consistent(self) -> "CollideConfig":
+        """Cross-field checks (each a one-line case error naming the field)."""
         if self.stiffness_rule is StiffnessRule.given and self.contact_stiffness is None:
             raise ValueError("stiffness_rule = 'given' needs contact_stiffness")
         if self.stiffness_rule is not StiffnessRule.given and self.contact_stiffness is not None:
             raise ValueError("contact_stiffness is only used with stiffness_rule = 'given'")
         if self.output_interval > self.duration:
             raise ValueError("output_interval must not exceed duration")
+        if self.max_duration is not None and self.max_duration < self.duration:
+            raise ValueError(f"max_duration ({self.max_duration:g} s) must not be less than duration "
+                             f"({self.duration:g} s)")
         return self
+
+    @property
+    def end_time(self) -> float:
+        """Longest simulated time [s]: max_duration, or duration when it is not set."""
+        return self.duration if self.max_duration is None else float(self.max_duration)

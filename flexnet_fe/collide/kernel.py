@@ -42,7 +42,7 @@ from flexnet_fe.collide.model import (A_BROKEN, A_CROSS, A_DISS_CONTACT, A_DISS_
                                       A_IMP_B, A_NBROKEN, A_NCONTACT, A_PEN, A_PEN_INT, A_PEN_RATIO, A_PHELD,
                                       A_SKIPPED, A_TUN_PART, A_TUN_SPEED, A_TUN_STEP, A_WORK_GRAVITY, NONFINITE, OK,
                                       TUNNEL)
-from flexnet_fe.collide.rigid_body import rigid_step
+from flexnet_fe.collide.rigid_body import RigidBody, rigid_step
 from flexnet_fe.contact.law import approach_speed, contact_potential, friction_force, normal_force
 from flexnet_fe.missile.shapes import FIN_PART_OFFSET, segment_body_closest, segment_core_closest
 from flexnet_fe.net.forces import rope_elastic_energy, spring_force
@@ -353,8 +353,8 @@ def _integrate(model, state, wk, dt):
     x, v, g, f, fmt = state.x, state.v, model.gravity, wk.f, wk.fmt
     for k in range(3):
         state.acc[A_WORK_GRAVITY] += model.m_mass * g[k] * state.mv[k] * dt
-    q = rigid_step(state.mx, state.mv, state.mq, state.mh, fmt[:3], fmt[3:], model.m_mass, model.inv_inertia, dt)
-    state.mq[:] = q
+    body = RigidBody(state.mx, state.mv, state.mq, state.mh, model.m_mass, model.inv_inertia)
+    rigid_step(body, fmt[:3], fmt[3:], dt)
     for i in range(x.shape[0]):
         if model.free[i]:
             a = dt / model.mass[i]

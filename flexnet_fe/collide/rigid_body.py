@@ -15,6 +15,8 @@ rotating R(q) in ω_B = I⁻¹ Rᵀ h).
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 from numba import njit
 
@@ -34,24 +36,35 @@ def body_rate(q, h, inv_inertia_b):
     return w
 
 
+class RigidBody(NamedTuple):
+    """A rigid body for :func:`rigid_step` (numba record): x [m] (3,), v [m/s] (3,), q (4,), h
+    [kg m²/s] (3,) as in the module doc (arrays, updated in place); mass [kg]; inv_inertia
+    [1/(kg m²)] (3, 3) about the CG in B."""
+
+    x: np.ndarray
+    v: np.ndarray
+    q: np.ndarray
+    h: np.ndarray
+    mass: float
+    inv_inertia: np.ndarray
+
+
 @njit(cache=True)
-def rigid_step(x, v, q, h, force_w, torque_w, mass, inv_inertia_b, dt):
-    """Advance the rigid body one step in place (see module doc). force_w [N] (3,) and torque_w
-    [N m] (3,) about the CG in W; mass [kg]; inv_inertia_b [1/(kg m²)] (3, 3) about the CG in B.
-    Returns the new q (4,) (x, v, h are updated in place)."""
+def rigid_step(body, force_w, torque_w, dt):
+    """Advance ``body`` (:class:`RigidBody`) one step in place (see module doc). force_w [N] (3,)
+    and torque_w [N m] (3,) about the CG in W; dt [s]."""
     for k in range(3):
-        v[k] += dt * force_w[k] / mass
-        x[k] += dt * v[k]
-        h[k] += dt * torque_w[k]
-    w_b = body_rate(q, h, inv_inertia_b)
-    return quat_exp_step(q, w_b, dt)
+        body.v[k] += dt * force_w[k] / body.mass
+        body.x[k] += dt * body.v[k]
+        body.h[k] += dt * torque_w[k]
+    w_b = body_rate(body.q, body.h, body.inv_inertia)
+    body.q[:] = quat_exp_step(body.q, w_b, dt)
 
 
 @njit(cache=True)
-def integrate_rigid(x, v, q, h, force_b, torque_b, mass, inv_inertia_b, dt, n_steps):
-    """Integrate ``n_steps`` with a force and torque constant in the BODY frame (test driver).
-    force_b [N] (3,), torque_b [N m] (3,) about the CG. Returns q (4,); x, v, h updated in place."""
+def integrate_rigid(body, force_b, torque_b, dt, n_steps):
+    """Integrate ``n_steps`` of ``dt`` [s] with a force [N] (3,) and torque [N m] (3,) about the CG
+    constant in the BODY frame (test driver); ``body`` (:class:`RigidBody`) is updated in place."""
     for _ in range(n_steps):
-        r = quat_to_matrix(q)
-        q = rigid_step(x, v, q, h, r @ force_b, r @ torque_b, mass, inv_inertia_b, dt)
-    return q
+        r = quat_to_matrix(body.q)
+        rigid_step(body, r @ force_b, r @ torque_b, dt)

@@ -31,6 +31,7 @@ from flexnet_fe.collide import model as M
 from flexnet_fe.collide.config import CollideConfig
 from flexnet_fe.collide.crop import (active_segments, boundary_motion, boundary_nodes, crop_reach, free_nodes,
                                      wave_speed)
+from flexnet_fe.collide.refine import split_near_path
 from flexnet_fe.collide.metrics import FinContacts, MissileHistory, collision_metrics
 from flexnet_fe.collide.scene import HeldNet, MissileStart, fin_planes, place_missile
 from flexnet_fe.collide.timestep import StepChoice, choose_step, contact_stiffness
@@ -62,7 +63,8 @@ class CollisionResult:
     """What a collision run produced (data). history: {column name with unit: (nt,) array};
     loads: fin loads; snapshots: (times [s] (k,), positions [m] (k, n, 3)) of the whole net,
     missile apex [m] (k, 3) and attitude (k, 4); summary: the ``collide`` section;
-    step: the time-step choice; free: (n,) bool crop mask; alive: (m,) bool intact segments."""
+    step: the time-step choice; free: (n,) bool crop mask; alive: (m,) bool intact segments;
+    net: the held net the run used (split per ``rope_split``; n, m count its nodes and segments)."""
 
     history: dict
     loads: FinLoads
@@ -74,6 +76,7 @@ class CollisionResult:
     step: StepChoice
     free: np.ndarray = field(repr=False)
     alive: np.ndarray = field(repr=False, default=None)
+    net: HeldNet | None = field(repr=False, default=None)
 
 
 ENERGY_TOLERANCE = 0.005
@@ -133,7 +136,7 @@ def build(net: HeldNet, missile: Missile, cfg: CollideConfig, gravity: float, lo
     shapes = pack_shapes(missile)
     start = place_missile(missile, net.x, cfg)
     aim = np.array([cfg.aim_point[0], cfg.aim_point[1], 0.0])
-    reach = crop_reach(start.bbox[2], wave_speed(rope.youngs_modulus, rope.density), cfg.duration,
+    reach = crop_reach(start.bbox[2], wave_speed(rope.youngs_modulus, rope.density), cfg.end_time,
                        cfg.crop_wave_speed_factor, cfg.crop_margin) if crop else math.inf
     free_full = free_nodes(net.x, aim, start.direction, reach) if crop else np.ones(model.n_nodes, dtype=bool)
     if not free_full.any():
@@ -225,53 +228,133 @@ def simulate(net: HeldNet, missile: Missile, cfg: CollideConfig, gravity: float,
              log: logging.Logger, *, crop: bool | None = None, n_snapshots: int | None = None,
              dt_scale: float = 1.0) -> CollisionResult:
     """Run the impact of ``missile`` on the held ``net`` per ``cfg`` (gravity g [m/s²] used only
-    if ``cfg.gravity``). Keyword overrides (tests, convergence studies): crop, n_snapshots,
-    dt_scale (the chosen dt is multiplied by it). Raises NumericalError on tunnelling (unless
-    allowed), a non-finite state or a growing energy balance. A crop too small is not an error:
-    ``crop_boundary_motion_m`` in the summary says how far the free nodes next to the held ones moved."""
+    if ``cfg.gravity``). The rope near the path is first split per ``cfg.rope_split``
+    (``collide.refine``; the result's ``net`` is the split net). Keyword overrides (tests,
+    convergence studies): crop, n_snapshots, dt_scale (the chosen dt is multiplied by it).
+
+    End rule: the run lasts at least ``cfg.duration``; from then on it stops at the first output
+    time at which the interaction is over (:func:`interaction_over`: no contact in the last
+    interval and the missile's tail ``cfg.end_clearance`` past every free net node), or at
+    ``cfg.end_time`` (max_duration), whichever comes first. ``summary['stop_reason']`` says which;
+    stopping at the cap while force still acts is a warning (Δv and impulses are then not final).
+
+    Raises NumericalError on tunnelling (unless allowed), a non-finite state or a growing energy
+    balance. A crop too small is not an error: ``crop_boundary_motion_m`` in the summary says how
+    far the free nodes next to the held ones moved."""
     t_wall = time.perf_counter()
+    net = split_near_path(net, missile, cfg)
     setup = build(net, missile, cfg, gravity, log, cfg.crop if crop is None else crop)
     km, start, step = setup.model, setup.start, setup.step
     n_sub = max(1, math.ceil(cfg.output_interval / (step.dt * dt_scale)))
     dt = cfg.output_interval / n_sub
-    n_out = max(1, round(cfg.duration / cfg.output_interval))
+    n_min = max(1, round(cfg.duration / cfg.output_interval))
+    n_max = max(n_min, round(cfg.end_time / cfg.output_interval))
     log.info("collide: dt = %.4g s (%s; limits: springs %.3g s, contact %.3g s, travel per step %.3g s; "
-             "safety %.2g), expected penetration %.3g m = %.3g rope radii, %d steps", dt, step.governed_by,
+             "safety %.2g), expected penetration %.3g m = %.3g rope radii, %d–%d steps", dt, step.governed_by,
              step.dt_spring, step.dt_contact, step.dt_travel, cfg.dt_safety, step.expected_penetration,
-             step.expected_penetration / net.rope.radius, n_sub * n_out)
+             step.expected_penetration / net.rope.radius, n_sub * n_min, n_sub * n_max)
     st = M.new_state(net.x[setup.used], km.seg.shape[0], km.fin_half.shape[0], start.x_cg, start.v_cg, start.q)
-    inertia = np.asarray(missile.inertia, dtype=np.float64)
-    rec = _Recorder(km, st, missile, inertia, cfg, start, n_out)
-    snap_at = set(np.unique(np.round(np.linspace(0, n_out, cfg.snapshots if n_snapshots is None
+    rec = _Recorder(km, st, missile, np.asarray(missile.inertia, dtype=np.float64), cfg, start, n_max)
+    snap_at = set(np.unique(np.round(np.linspace(0, n_min, cfg.snapshots if n_snapshots is None
                                                   else n_snapshots)).astype(int)).tolist())
-    x_full = np.array(net.x, dtype=np.float64)
-    snaps = ([0.0], [x_full.copy()], [start.apex.copy()], [st.mq.copy()])
-    ev_rows, row_start = [], [0]
     x_start = st.x.copy()
-    names = part_names(missile)
-    with progress_bar(n_out, "collide") as bar:
-        for k in range(1, n_out + 1):
-            status = K.advance(km, st, n_sub, dt)
+    run = _drive(_Drive(setup, st, rec, cfg, net, missile, dt, n_sub), n_min, n_max, snap_at, log)
+    rec.truncate(run.n_done)
+    loads = _fin_loads(missile, cfg, run.n_done, run.row_start, run.ev_rows, net.rope.diameter)
+    summary = rec.summary(setup, loads, x_start, dt, n_sub * run.n_done, time.perf_counter() - t_wall)
+    _end_summary(summary, run, rec, cfg, net)
+    alive = np.ones(net.model.n_springs, dtype=bool)
+    alive[setup.seg_idx] = st.alive
+    snaps = run.snaps
+    return CollisionResult(history=rec.cols, loads=loads, snap_t=np.array(snaps[0]), snap_x=np.array(snaps[1]),
+                           snap_apex=np.array(snaps[2]), snap_q=np.array(snaps[3]), summary=summary, step=step,
+                           free=setup.free_full, alive=alive, net=net)
+
+
+def interaction_over(contacts_last: float, tail_along: float, net_front_along: float, clearance: float) -> bool:
+    """The end rule of a collision: no (segment, part) contact in the last output interval and the
+    missile's tail (along the flight path [m]) at least ``clearance`` [m] beyond the foremost free
+    net node (``net_front_along`` [m])."""
+    return contacts_last == 0 and tail_along - net_front_along >= clearance
+
+
+@dataclass(frozen=True)
+class _Drive:
+    """What the output loop needs (data)."""
+
+    setup: Setup
+    st: M.CollideState
+    rec: "_Recorder"
+    cfg: CollideConfig
+    net: HeldNet
+    missile: Missile
+    dt: float
+    n_sub: int
+
+
+@dataclass
+class _Run:
+    """What the output loop produced: intervals done, why it stopped, fin-load rows, snapshots."""
+
+    n_done: int
+    stop_reason: str
+    row_start: list
+    ev_rows: list
+    snaps: tuple
+
+
+def _drive(d: _Drive, n_min: int, n_max: int, snap_at: set, log) -> _Run:
+    """Advance the kernel interval by interval from 1 to at most ``n_max`` (end rule: ``simulate``)."""
+    st, setup, cfg, km = d.st, d.setup, d.cfg, d.setup.model
+    x_full = np.array(d.net.x, dtype=np.float64)
+    snaps = ([0.0], [x_full.copy()], [setup.start.apex.copy()], [st.mq.copy()])
+    run = _Run(0, "max_duration" if cfg.max_duration is not None else "duration", [0], [], snaps)
+    names = part_names(d.missile)
+    with progress_bar(n_max, "collide") as bar:
+        for k in range(1, n_max + 1):
+            status = K.advance(km, st, d.n_sub, d.dt)
             t = k * cfg.output_interval
             if status != M.OK:
-                raise NumericalError(_stop_message(status, st, cfg, t, names, setup, dt))
+                raise NumericalError(_stop_message(status, st, cfg, t, names, setup, d.dt))
             fin, pt, imp = _take_fin_events(km, st)
-            row_start.append(row_start[-1] + fin.size)
+            run.row_start.append(run.row_start[-1] + fin.size)
             if fin.size:
-                ev_rows.append((fin, pt, imp))
-            apex = rec.sample(k, t, log)
-            if k in snap_at:
+                run.ev_rows.append((fin, pt, imp))
+            apex = d.rec.sample(k, t, log)
+            run.n_done = k
+            over = k >= n_min and interaction_over(
+                d.rec.cols["contacts"][k], d.rec.cols["apex_along_path_m"][k] - d.missile.length,
+                float((st.x[km.free] @ setup.start.direction).max()), cfg.end_clearance)
+            if k in snap_at or over or k == n_max:
                 x_full[setup.used] = st.x
                 for lst, val in zip(snaps, (t, x_full.copy(), apex.copy(), st.mq.copy())):
                     lst.append(val)
             bar.update(1)
-    loads = _fin_loads(missile, cfg, n_out, row_start, ev_rows, net.rope.diameter)
-    summary = rec.summary(setup, loads, x_start, dt, n_sub * n_out, time.perf_counter() - t_wall)
-    alive = np.ones(net.model.n_springs, dtype=bool)
-    alive[setup.seg_idx] = st.alive
-    return CollisionResult(history=rec.cols, loads=loads, snap_t=np.array(snaps[0]), snap_x=np.array(snaps[1]),
-                           snap_apex=np.array(snaps[2]), snap_q=np.array(snaps[3]), summary=summary, step=step,
-                           free=setup.free_full, alive=alive)
+            if over:
+                run.stop_reason = "interaction_over"
+                break
+    return run
+
+
+def _end_summary(summary: dict, run: _Run, rec: "_Recorder", cfg: CollideConfig, net: HeldNet) -> None:
+    """Add the end rule's keys (stop reason, end time, force at the end) and its warning to ``summary``."""
+    c = rec.cols
+    force_end = float(c["contact_force_mean_n"][-1])
+    summary.update({"stop_reason": run.stop_reason, "end_time_s": float(c["t_s"][-1]), "force_at_end_n": force_end,
+           "rope_split": int(cfg.rope_split), "rope_split_margin_m": float(cfg.rope_split_margin),
+           "net_nodes": int(net.model.n_nodes), "net_segments": int(net.model.n_springs)})
+    if cfg.rope_split > 1:
+        l_min = float(np.min(net.rest_length))
+        if l_min < net.rope.diameter:
+            summary["warnings"].append(
+                f"collide: rope_split = {cfg.rope_split} makes rope segments of {l_min:.3g} m, shorter than the rope "
+                f"diameter {net.rope.diameter:.3g} m: neighbouring capsules overlap and the contact step rule no "
+                f"longer bounds a node's contact stiffness (radar_traction at rope_split = 16 blew up)")
+    if run.stop_reason != "interaction_over":
+        what = (f"contact force {force_end:.4g} N still acting" if force_end > 0 else
+                f"no contact, but the missile's tail is not {cfg.end_clearance:g} m past the net")
+        summary["warnings"].append(f"collide: stopped at the {run.stop_reason.replace('_', ' ')} {c['t_s'][-1]:.4g} s with "
+                            f"{what}: Δv, impulses and duration may not be final (raise collide.max_duration)")
 
 
 class _Recorder:
@@ -353,6 +436,10 @@ class _Recorder:
                 f"collide: energy balance grew by {bal:.3g} J by t = {t:.4g} s, more than {ENERGY_GROWTH_LIMIT:.0%} "
                 f"of the {self.max_exchanged:.3g} J exchanged at {ENERGY_GROWTH_SAMPLES} samples in a row: an "
                 f"unstable contact or step")
+
+    def truncate(self, n_done: int) -> None:
+        """Keep rows 0..n_done (the run stopped there)."""
+        self.cols = {name: col[:n_done + 1] for name, col in self.cols.items()}
 
     def summary(self, setup, loads, x_start, dt, steps, wall) -> dict:
         return _summary(self, setup, loads, x_start, dt, steps, wall)

@@ -55,6 +55,7 @@ def run_collide(net_cfg, deploy_cfg, missile_cfg: MissileConfig, collide_cfg: Co
              "aim (%.3g, %.3g) m", net.model.kind, net.source.value, net.model.n_nodes, missile.name,
              missile.mass, collide_cfg.impact_speed, collide_cfg.incidence_angle, *collide_cfg.aim_point)
     res = simulate(net, missile, collide_cfg, air.gravity, log)
+    net = res.net  # split near the path per collide.rope_split
     write_outputs(res, net.model.springs[res.alive], net.rest_length[res.alive],
                   net.model.stiffness[res.alive], missile, stage_dir)
     from flexnet_fe.collide.plots import plot_all
@@ -62,9 +63,9 @@ def run_collide(net_cfg, deploy_cfg, missile_cfg: MissileConfig, collide_cfg: Co
     plot_all(res, missile, collide_cfg, stage_dir, title=f"{missile.name} missile vs {net.model.kind} net")
     s = res.summary
     log.info("collide: peak |a| = %.4g m/s² at %.4g s, |Δv|/v = %.3g, attitude change %.3g rad, contact "
-             "duration %.4g s, %s, max penetration %.3g m, momentum error %.2g, energy error %.2g, %d broken "
+             "duration %.4g s (stopped: %s at %.4g s), %s, max penetration %.3g m, momentum error %.2g, energy error %.2g, %d broken "
              "segments, %d steps of %.3g s in %.1f s", s["peak_accel_mps2"], s["peak_accel_time_s"], s["dv_over_v"],
-             s["max_attitude_change_rad"], s["duration_s"],
+             s["max_attitude_change_rad"], s["duration_s"], s["stop_reason"], s["end_time_s"],
              "passed through" if s["passed_through"] else "net carried forward / still in contact",
              s["max_penetration_m"], s["momentum_error_rel"], s["energy_error_rel"], s["broken_segments"], s["steps"], s["dt_s"],
              s["wall_s"])

@@ -34,7 +34,7 @@ Packed arrays (``pack_shapes(missile) -> ShapeArrays``, a NamedTuple; pass ``*sh
 
 ``@njit`` functions (usable inside other ``@njit`` code):
 
-``closest_point(p, *shapes) -> (d, normal, q, part)``
+``closest_point(p, shapes) -> (d, normal, q, part)``
     p [m] (3,) a point in B. d [m]: signed distance to the missile's surface (negative inside;
     it is the minimum of the parts' own signed distances: outside all parts this is the exact
     distance to their union; inside, it is the depth in the part the point is deepest in, exact
@@ -51,7 +51,7 @@ Packed arrays (``pack_shapes(missile) -> ShapeArrays``, a NamedTuple; pass ``*sh
     the deepest / nearest point of a segment for the body of revolution.
 
 Allocation-free variants for hot loops return the vectors as scalars:
-``closest_point_scalar(p, *shapes) -> (d, n_x, n_y, n_z, q_x, q_y, q_z, part)``,
+``closest_point_scalar(p, shapes) -> (d, n_x, n_y, n_z, q_x, q_y, q_z, part)``,
 ``body_closest_scalar(p, prof_kind, prof_data, prof_part) -> (d, n_x, n_y, n_z, q_x, q_y, q_z,
 part)``, ``fin_closest_scalar(p, fin_origin[i], ...) -> (d, n_x, n_y, n_z, q_x, q_y, q_z)``.
 
@@ -320,31 +320,29 @@ def fin_closest_point(p, origin, axes, poly, half):
 
 
 @njit(cache=True)
-def closest_point_scalar(p, prof_kind, prof_data, prof_part, fin_origin, fin_axes, fin_poly,
-                         fin_half_thickness, fin_part, fin_bound):
+def closest_point_scalar(p, shapes):
     """Allocation-free :func:`closest_point`: (d, n_x, n_y, n_z, q_x, q_y, q_z, part)."""
-    d, nx, ny, nz, qx, qy, qz, part = body_closest_scalar(p, prof_kind, prof_data, prof_part)
-    for i in range(fin_origin.shape[0]):
+    d, nx, ny, nz, qx, qy, qz, part = body_closest_scalar(p, shapes.prof_kind, shapes.prof_data, shapes.prof_part)
+    fin_bound = shapes.fin_bound
+    for i in range(shapes.fin_origin.shape[0]):
         # |p - c| - r_bound is a lower bound of the plate's distance: skip plates that cannot win
         dc = np.sqrt((p[0] - fin_bound[i, 0]) ** 2 + (p[1] - fin_bound[i, 1]) ** 2
                      + (p[2] - fin_bound[i, 2]) ** 2)
         if dc - fin_bound[i, 3] >= d:
             continue
-        di, mx, my, mz, sx, sy, sz = fin_closest_scalar(p, fin_origin[i], fin_axes[i],
-                                                        fin_poly[i], fin_half_thickness[i])
+        di, mx, my, mz, sx, sy, sz = fin_closest_scalar(p, shapes.fin_origin[i], shapes.fin_axes[i],
+                                                        shapes.fin_poly[i], shapes.fin_half_thickness[i])
         if di < d:
-            d, nx, ny, nz, qx, qy, qz, part = di, mx, my, mz, sx, sy, sz, fin_part[i]
+            d, nx, ny, nz, qx, qy, qz, part = di, mx, my, mz, sx, sy, sz, shapes.fin_part[i]
     return d, nx, ny, nz, qx, qy, qz, part
 
 
 @njit(cache=True)
-def closest_point(p, prof_kind, prof_data, prof_part, fin_origin, fin_axes, fin_poly,
-                  fin_half_thickness, fin_part, fin_bound):
+def closest_point(p, shapes):
     """(signed distance [m], outward normal (3,), closest surface point [m] (3,), part id) of the
-    whole missile for a point p [m] (3,) in B; the part with the smallest signed distance wins."""
-    d, nx, ny, nz, qx, qy, qz, part = closest_point_scalar(
-        p, prof_kind, prof_data, prof_part, fin_origin, fin_axes, fin_poly, fin_half_thickness,
-        fin_part, fin_bound)
+    whole missile (``shapes``: :class:`ShapeArrays`) for a point p [m] (3,) in B; the part with
+    the smallest signed distance wins."""
+    d, nx, ny, nz, qx, qy, qz, part = closest_point_scalar(p, shapes)
     return d, np.array([nx, ny, nz]), np.array([qx, qy, qz]), part
 
 
@@ -352,11 +350,9 @@ def closest_point(p, prof_kind, prof_data, prof_part, fin_origin, fin_axes, fin_
 
 
 @njit(cache=True)
-def _closest_points_kernel(pts, prof_kind, prof_data, prof_part, fin_origin, fin_axes, fin_poly,
-                           fin_half_thickness, fin_part, fin_bound, d, nrm, q, part):
+def _closest_points_kernel(pts, shapes, d, nrm, q, part):
     for k in range(pts.shape[0]):
-        dk, nk, qk, pk = closest_point(pts[k], prof_kind, prof_data, prof_part, fin_origin,
-                                       fin_axes, fin_poly, fin_half_thickness, fin_part, fin_bound)
+        dk, nk, qk, pk = closest_point(pts[k], shapes)
         d[k], nrm[k], q[k], part[k] = dk, nk, qk, pk
 
 
@@ -366,7 +362,7 @@ def closest_points(points: np.ndarray, shapes: ShapeArrays):
     pts = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 3)
     n = pts.shape[0]
     d, nrm, q, part = np.empty(n), np.empty((n, 3)), np.empty((n, 3)), np.empty(n, np.int64)
-    _closest_points_kernel(pts, *shapes, d, nrm, q, part)
+    _closest_points_kernel(pts, shapes, d, nrm, q, part)
     return d, nrm, q, part
 
 
@@ -386,11 +382,12 @@ def _clamp01(t):
 
 
 @njit(cache=True)
-def _segment_edge_2d(au, av, aw, bu, bv, bw, cu, cv, du, dv):
-    """Closest points of the 3-D segment a–b (fin coordinates) and the in-plane edge c–d (w = 0).
-    Returns (squared distance [m²], s on a–b, t on c–d) (Ericson, Real-Time Collision Detection
+def _segment_edge_2d(ra, rb, cu, cv, du, dv):
+    """Closest points of the 3-D segment a–b (ra, rb [m] (3,), fin coordinates u, v, w) and the
+    in-plane edge (cu, cv)–(du, dv) (w = 0). Returns (squared distance [m²], s on a–b, t on c–d) (Ericson, Real-Time Collision Detection
     §5.1.9; a parallel pair returns one of its closest pairs)."""
-    d1u, d1v, d1w = bu - au, bv - av, bw - aw
+    au, av, aw = ra[0], ra[1], ra[2]
+    d1u, d1v, d1w = rb[0] - au, rb[1] - av, rb[2] - aw
     d2u, d2v = du - cu, dv - cv
     ru, rv, rw = au - cu, av - cv, aw
     a = d1u * d1u + d1v * d1v + d1w * d1w
@@ -460,7 +457,7 @@ def segment_core_closest(a, b, origin, axes, poly):
     for i in range(k):
         cu, cv = poly[i, 0], poly[i, 1]
         du, dv = poly[(i + 1) % k, 0], poly[(i + 1) % k, 1]
-        d2, s, t = _segment_edge_2d(ra[0], ra[1], aw, rb[0], rb[1], bw, cu, cv, du, dv)
+        d2, s, t = _segment_edge_2d(ra, rb, cu, cv, du, dv)
         if d2 < best:
             best, bs, bu, bv = d2, s, cu + t * (du - cu), cv + t * (dv - cv)
     return np.sqrt(best), bs, bu, bv, best == 0.0

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from flexnet_fe.collide.rigid_body import body_rate, integrate_rigid
+from flexnet_fe.collide.rigid_body import RigidBody, body_rate, integrate_rigid
 from flexnet_fe.frames import quat_to_matrix
 
 
@@ -15,8 +15,8 @@ def test_constant_body_torque_about_principal_axis():
     inertia = np.diag([0.5, 20.0, 20.0])
     tau, n, dt = 3.0, 2000, 1e-4
     x, v, h = np.zeros(3), np.zeros(3), np.zeros(3)
-    q = integrate_rigid(x, v, np.array([1.0, 0, 0, 0]), h, np.zeros(3), np.array([tau, 0, 0]),
-                        10.0, np.linalg.inv(inertia), dt, n)
+    q = np.array([1.0, 0, 0, 0])
+    integrate_rigid(RigidBody(x, v, q, h, 10.0, np.linalg.inv(inertia)), np.zeros(3), np.array([tau, 0, 0]), dt, n)
     t = n * dt
     w = body_rate(q, h, np.linalg.inv(inertia))
     assert w[0] == pytest.approx(tau * t / 0.5, rel=1e-12)  # momentum update is exact
@@ -29,7 +29,7 @@ def test_constant_force_translation():
     n, dt, mass = 1000, 1e-4, 7.0
     f = np.array([1.0, -2.0, 3.0])
     x, v, h = np.zeros(3), np.zeros(3), np.zeros(3)
-    integrate_rigid(x, v, np.array([1.0, 0, 0, 0]), h, f, np.zeros(3), mass, np.eye(3), dt, n)
+    integrate_rigid(RigidBody(x, v, np.array([1.0, 0, 0, 0]), h, mass, np.eye(3)), f, np.zeros(3), dt, n)
     np.testing.assert_allclose(v, f / mass * n * dt, rtol=1e-12)
     np.testing.assert_allclose(x, 0.5 * f / mass * (n * dt) ** 2, rtol=1.5 / n)
 
@@ -44,8 +44,8 @@ def test_torque_free_asymmetric_body_keeps_momentum_and_energy():
     drifts = []
     for dt in (2e-4, 1e-4):
         x, v, h = np.zeros(3), np.zeros(3), h0.copy()
-        q = integrate_rigid(x, v, np.array([1.0, 0, 0, 0]), h, np.zeros(3), np.zeros(3),
-                            1.0, inv, dt, int(2.0 / dt))
+        q = np.array([1.0, 0, 0, 0])
+        integrate_rigid(RigidBody(x, v, q, h, 1.0, inv), np.zeros(3), np.zeros(3), dt, int(2.0 / dt))
         np.testing.assert_array_equal(h, h0)
         w = body_rate(q, h, inv)
         e = 0.5 * w @ inertia @ w

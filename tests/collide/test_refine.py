@@ -1,0 +1,148 @@
+"""Rope subdivision near the contact (``[collide] rope_split``, ``collide.refine``) and the end rule."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from flexnet_fe.cli import main
+from flexnet_fe.collide.config import CollideConfig
+from flexnet_fe.collide.refine import split_near_path, split_segments
+from flexnet_fe.collide.simulate import interaction_over, simulate
+
+from .test_collide import _fin_edge_scene
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def _stretched(scenes):
+    """A flat 0.4 m net (0.05 m mesh) stretched 5 % in x, 2 % in y: every rope taut, tensions differ."""
+    net = scenes.flat_net(0.4, 0.05)
+    return scenes.moved(net, net.x * np.array([1.05, 1.02, 1.0]))
+
+
+def _nodal_rope_forces(net) -> np.ndarray:
+    """Elastic rope forces on the nodes [N] (n, 3) of a held net at rest, Eq. (1)–(3) written out
+    in numpy (an independent second implementation of ``net.forces.spring_force`` without damping)."""
+    m = net.model
+    i, j = m.springs[:, 0], m.springs[:, 1]
+    d = net.x[j] - net.x[i]
+    ln = np.linalg.norm(d, axis=1)
+    t = np.maximum(m.stiffness_ea / net.rest_length * (ln - (net.rest_length - m.slack_offset)), 0.0)
+    f = t[:, None] * d / ln[:, None]
+    out = np.zeros_like(net.x)
+    np.add.at(out, i, f)
+    np.add.at(out, j, -f)
+    return out
+
+
+@pytest.mark.parametrize("k", [2, 3, 8])
+def test_split_keeps_mass_centre_rope_and_dashpots(scenes, k):
+    # Reference: the split's definition (collide.refine) — closed forms. Mass and centre of mass
+    # unchanged (the rope mass ρ A l0 is only re-lumped along the chord); new nodes at rest (momentum
+    # 0 = before); per split segment the k pieces keep E·A, their rest lengths and slack offsets add
+    # up to the segment's, k springs in series give EA/l0 and k dashpots in series give c.
+    net = _stretched(scenes)
+    m = net.model
+    idx = np.arange(0, m.n_springs, 3)
+    fine = split_segments(net, idx, k)
+    fm = fine.model
+    n_new = idx.size * (k - 1)
+    assert fm.n_nodes == m.n_nodes + n_new and fm.n_springs == m.n_springs + idx.size * (k - 1)
+    assert fm.mass.sum() == pytest.approx(m.mass.sum(), rel=1e-13)
+    np.testing.assert_allclose(fm.mass @ fine.x, m.mass @ net.x, rtol=1e-12, atol=1e-15)
+    assert np.all(fm.mass > 0) and not fm.v0[m.n_nodes:].any()
+    pieces = slice(m.n_springs - idx.size, None)  # the pieces come last, k per split segment, in order
+    chains = lambda a: np.asarray(a)[pieces].reshape(idx.size, k)  # noqa: E731
+    np.testing.assert_allclose(chains(fine.rest_length).sum(axis=1), net.rest_length[idx], rtol=1e-13)
+    np.testing.assert_allclose(chains(fm.slack_offset).sum(axis=1), m.slack_offset[idx], rtol=1e-13, atol=1e-18)
+    assert np.all(chains(fm.stiffness_ea) == m.stiffness_ea[idx, None])
+    k_series = 1.0 / (1.0 / chains(fm.stiffness_ea / fm.rest_length)).sum(axis=1)
+    np.testing.assert_allclose(k_series, m.stiffness[idx], rtol=1e-13)
+    np.testing.assert_allclose(1.0 / (1.0 / chains(fm.damping)).sum(axis=1), m.damping[idx], rtol=1e-13)
+    # untouched segments keep every field
+    keep = np.setdiff1d(np.arange(m.n_springs), idx)
+    np.testing.assert_array_equal(fm.springs[:keep.size], m.springs[keep])
+
+
+def test_split_net_at_rest_stays_at_rest(scenes):
+    # Reference: static equilibrium. On the stretched held net every old node feels the same rope
+    # force before and after the split (the chain carries the segment's tension), and every new
+    # chord node feels none (equal tension both sides): a net in equilibrium stays in equilibrium,
+    # and the held state's forces are not changed by the split. Tolerance: round-off of T ~ 1e-2 N.
+    net = _stretched(scenes)
+    fine = split_segments(net, np.arange(net.model.n_springs), 4)
+    f0, f1 = _nodal_rope_forces(net), _nodal_rope_forces(fine)
+    scale = np.abs(f0).max()
+    assert scale > 0
+    n = net.model.n_nodes
+    np.testing.assert_allclose(f1[:n], f0, rtol=0, atol=1e-12 * scale)
+    assert np.abs(f1[n:]).max() < 1e-12 * scale
+
+
+def test_split_near_path_selects_by_margin(radar, scenes):
+    # Reference: geometry. Only segments with both ends within r_max + margin of the path line are
+    # split; a larger margin splits a superset; rope_split = 1 is the net itself.
+    net = scenes.flat_net(2.0, 0.1)
+    cfg = CollideConfig(net_source="flat_taut", rope_split=2, rope_split_margin=0.0)
+    assert split_near_path(net, radar, cfg.model_copy(update={"rope_split": 1})) is net
+    small = split_near_path(net, radar, cfg)
+    big = split_near_path(net, radar, cfg.model_copy(update={"rope_split_margin": 0.3}))
+    n0 = net.model.n_nodes
+    assert 0 < small.model.n_nodes - n0 < big.model.n_nodes - n0 < net.model.n_springs
+    r_new = np.hypot(small.x[n0:, 0], small.x[n0:, 1])
+    from flexnet_fe.collide.scene import shape_bbox
+
+    assert r_new.max() <= shape_bbox(radar)[2] + 1e-12  # midpoints of chords between nodes inside
+
+
+def test_split_contact_scene_closes_energy_and_momentum(radar, log, scenes):
+    # Reference: energy and momentum conservation. The fin-edge scene (test_collide) with its rope
+    # split 4× near the path: momentum to round-off; the energy balance error is the step error of
+    # the stiff contact, first order in dt (measured: 0.60 / 0.26 / 0.12 % of the energy exchanged at
+    # dt × 1 / 0.5 / 0.25), so halving dt must halve it (ratio 0.5 ± 0.15) and at dt/2 it is within
+    # ENERGY_TOLERANCE (0.5 %); wing_1 still loaded, nothing tunnels.
+    cfg = CollideConfig(net_source="flat_taut", duration=4.5e-3, crop=False, rope_split=4, rope_split_margin=0.5)
+    runs = [simulate(_fin_edge_scene(scenes), radar, cfg, 9.81, log, dt_scale=sc) for sc in (1.0, 0.5)]
+    s = runs[1].summary
+    assert s["rope_split"] == 4 and runs[1].net.model.n_nodes > 4
+    assert s["fin_impulse_ns"]["wing_1"] > 0.0 and not s["tunnelling"]
+    assert s["energy_error_rel"] < 5e-3 and s["momentum_error_rel"] < 1e-8
+    assert 0.35 < s["energy_error_rel"] / runs[0].summary["energy_error_rel"] < 0.65
+
+
+def test_end_rule():
+    # Reference: the documented rule (collide.simulate): over only without contact AND with the tail
+    # at least the clearance past the foremost free net node.
+    assert interaction_over(0, 1.2, 1.0, 0.1)
+    assert not interaction_over(1, 1.2, 1.0, 0.1)
+    assert not interaction_over(0, 1.05, 1.0, 0.1)
+
+
+def test_run_past_duration_until_over_or_cap(radar, log, scenes):
+    # Reference: the end rule. The fin-edge scene's contact is over by ~3.5 ms with the tail past
+    # the net; with duration 1 ms and a 20 ms cap the run stops early, 'interaction_over'; with no
+    # cap it stops at the duration while the rope still touches, with a warning saying so.
+    base = CollideConfig(net_source="flat_taut", duration=1e-3, crop=False)
+    short = simulate(_fin_edge_scene(scenes), radar, base, 9.81, log).summary
+    assert short["stop_reason"] == "duration" and short["end_time_s"] == pytest.approx(1e-3)
+    ext = simulate(_fin_edge_scene(scenes), radar, base.model_copy(update={"max_duration": 0.02}), 9.81, log).summary
+    assert ext["stop_reason"] == "interaction_over" and 1e-3 < ext["end_time_s"] < 0.02
+    assert not any("stopped at" in w for w in ext["warnings"])
+    if short["force_at_end_n"] > 0:
+        assert any("still acting" in w for w in short["warnings"])
+
+
+@pytest.mark.parametrize("value, reason", [("0", "greater than or equal to 1"), ("2.5", "integer"),
+                                           ("-0.1", "greater than or equal to 0")])
+def test_bad_rope_split_is_one_line(tmp_path, capsys, value, reason):
+    # Reference: the project's refusal rule (one line naming file, field and reason; no traceback).
+    field = "rope_split_margin" if value.startswith("-") else "rope_split"
+    code = main(["run", str(ROOT / "cases/radar_traction"), "--out", str(tmp_path / "r"),
+                 "--set", f"collide.{field}={value}"])
+    err = capsys.readouterr().err.strip().splitlines()
+    lines = [ln for ln in err if not ln.startswith(("INFO ", "WARNING ", "DEBUG "))]
+    assert code == 2 and len(lines) == 1, err
+    assert "case.toml" in lines[0] and f"collide.{field}" in lines[0] and reason in lines[0], lines[0]
