@@ -45,13 +45,6 @@ LONG_FUNCTIONS: dict[str, str] = {
 }
 
 WIDE_KERNELS: dict[str, str] = {
-    "flexnet_fe.missile.shapes:closest_point_scalar": "helper A (issue 14 kernels: shape records)",
-    "flexnet_fe.missile.shapes:closest_point": "helper A",
-    "flexnet_fe.missile.shapes:_closest_points_kernel": "helper A",
-    "flexnet_fe.missile.shapes:_segment_edge_2d": "helper A",
-    "flexnet_fe.collide.rigid_body:rigid_step": "helper A",
-    "flexnet_fe.collide.rigid_body:integrate_rigid": "helper A",
-    "flexnet_fe.collide.kernel:_apply_to_node": "helper A (added in 1e91cf6, 9 positional)",
 }
 
 UPWARD_IMPORTS: dict[tuple[str, str], str] = {
@@ -65,7 +58,6 @@ UPWARD_IMPORTS: dict[tuple[str, str], str] = {
 }
 
 FILE_NAME_LITERALS: dict[tuple[str, str], str] = {
-    ("flexnet_fe.collide.stage", "missile.pvd"): "helper A: use runs.MISSILE_PVD",
     ("flexnet_fe.missile.mesh", "body.msh"): "missile/mesh.py owner (lead): use runs.BODY_MSH",
     ("flexnet_fe.flight.stage", "sweep.csv"): "flight stage owner: its built-in sweep table is another file "
                                               "of the same name as runs.SWEEP_TABLE; name it in runs.py",

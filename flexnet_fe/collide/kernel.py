@@ -129,10 +129,11 @@ def _near_fin(model, fi, pa, pb):
 
 
 @njit(cache=True)
-def _apply_to_node(model, state, f, node, weight, f0, f1, f2, dt):
-    """Add ``weight`` × the contact force (f0, f1, f2) [N] to a free node's force row of ``f``;
+def _apply_to_node(model, state, f, node, weight, force, dt):
+    """Add ``weight`` × the contact force ``force`` = (f0, f1, f2) [N] to a free node's force row of ``f``;
     a held node (crop boundary) does not move, so its impulse [N s] goes to the held-node
     accumulator that closes the momentum balance."""
+    f0, f1, f2 = force
     if model.free[node]:
         f[node, 0] += weight * f0
         f[node, 1] += weight * f1
@@ -172,8 +173,8 @@ def _apply(model, state, wk, slot, fin, delta, s, dt):
     vt0, vt1, vt2 = vr0 - vn * nw0, vr1 - vn * nw1, vr2 - vn * nw2
     ft0, ft1, ft2 = friction_force(fn, model.mu, vt0, vt1, vt2, model.v_reg)
     f0, f1, f2 = fn * nw0 + ft0, fn * nw1 + ft1, fn * nw2 + ft2
-    _apply_to_node(model, state, f, i, w, f0, f1, f2, dt)
-    _apply_to_node(model, state, f, j, s, f0, f1, f2, dt)
+    _apply_to_node(model, state, f, i, w, (f0, f1, f2), dt)
+    _apply_to_node(model, state, f, j, s, (f0, f1, f2), dt)
     fmt[0] -= f0
     fmt[1] -= f1
     fmt[2] -= f2

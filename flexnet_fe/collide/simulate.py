@@ -36,6 +36,7 @@ from flexnet_fe.collide.metrics import FinContacts, MissileHistory, collision_me
 from flexnet_fe.collide.scene import HeldNet, MissileStart, fin_planes, place_missile
 from flexnet_fe.collide.timestep import StepChoice, choose_step, contact_stiffness
 from flexnet_fe.contact.law import DAMPING_CODE, hysteresis_factor
+from flexnet_fe.contact.restitution import restitution_achieved, restitution_warning
 from flexnet_fe.errors import NumericalError
 from flexnet_fe.missile.geometry import Missile
 from flexnet_fe.missile.shapes import pack_shapes, part_names
@@ -472,6 +473,10 @@ def _summary(rec: _Recorder, setup: Setup, loads: FinLoads, x_start, dt, steps, 
                        contact_force_n=c["contact_force_mean_n"], gravity_mps2=km.gravity, mass_kg=missile.mass),
         FinContacts(list(loads.fin_names), loads.fin, loads.force, cfg.output_interval), cfc=cfg.cfc_class)
     warnings += metrics.pop("warnings")
+    code = DAMPING_CODE[cfg.damping_model]
+    e_ach = restitution_achieved(code, cfg.restitution, 10.0, 1.0, exponent=cfg.contact_exponent) if code else 1.0
+    bad_e = restitution_warning(cfg.damping_model.value, cfg.restitution, e_ach)
+    warnings += [bad_e] if bad_e else []
     summary = {
         # headline numbers: CFC-filtered peak (collide.metrics) and window-free Δv, impulses, duration
         "peak_accel_mps2": metrics["peak_accel_mps2"],
@@ -504,6 +509,8 @@ def _summary(rec: _Recorder, setup: Setup, loads: FinLoads, x_start, dt, steps, 
         "contact_stiffness_body": km.k_body,
         "contact_stiffness_fin": km.k_fin,
         "stiffness_rule": cfg.stiffness_rule.value,
+        # the restitution the damping law gives an impact above the approach-speed floor
+        "restitution_achieved": e_ach,
         "free_nodes": int(km.free.sum()),
         "active_segments": int(km.seg.shape[0]),
         "crop_reach_m": setup.reach if math.isfinite(setup.reach) else None,

@@ -36,7 +36,7 @@ from flexnet_fe.missile.geometry import Missile
 from flexnet_fe.missile.build import build_missile
 from flexnet_fe.net.snapshots import write_pvd, write_vtu
 from flexnet_fe.frames import quat_to_matrix
-from flexnet_fe.runs import FIN_CONTACTS, HISTORY, NET_PVD
+from flexnet_fe.runs import FIN_CONTACTS, HISTORY, MISSILE_PVD, NET_PVD
 
 
 def run_collide(net_cfg, deploy_cfg, missile_cfg: MissileConfig, collide_cfg: CollideConfig, air: Air,
@@ -100,7 +100,7 @@ def write_outputs(res: CollisionResult, springs: np.ndarray, rest: np.ndarray, k
         _write_lines(snap / name, pts, wire_lines)
         mis_entries.append((float(t), f"snapshots/{name}"))
     write_pvd(stage_dir / NET_PVD, net_entries)
-    write_pvd(stage_dir / "missile.pvd", mis_entries)
+    write_pvd(stage_dir / MISSILE_PVD, mis_entries)
 
 
 def missile_wireframe(missile: Missile, n_around: int = 24) -> tuple[np.ndarray, np.ndarray]:

@@ -42,18 +42,18 @@ def restitution_achieved(model_code: int, e_req: float, v: float, v_floor: float
     return math.nan
 
 
-RESTITUTION_TOLERANCE = 0.02
-"""Largest |e achieved − e requested| [-] a collision runs with without a warning: the RK4
-integration above is exact to 1e-4, so a larger gap is the damping law's, not the check's."""
+RESTITUTION_TOLERANCE = 0.05
+"""Largest |e achieved − e requested| [-] a collision runs with without a warning. Measured on
+radar × traction (rope_split 4, 12 ms): Lankarani–Nikravesh at e = 0.5 (achieves 0.725) against
+Flores (0.470), Δe = 0.255, moves the total impulse by 1.9 % and the CFC-filtered peak by 4.3 %;
+Δe ≤ 0.05 therefore moves the headlines by ≲ 1 % (the RK4 check itself is exact to 1e-4)."""
 
 
-def restitution_warning(model_code: int, model_name: str, e_req: float, exponent: float) -> str | None:
-    """One warning line when the damping model does not achieve the requested restitution
-    (above the approach-speed floor, where the achieved value is speed independent), else None."""
-    if model_code == 0:
+def restitution_warning(model_name: str, e_req: float, e_achieved: float) -> str | None:
+    """One warning line when the damping model ``model_name`` achieves ``e_achieved``
+    (:func:`restitution_achieved` above the approach-speed floor) instead of the requested
+    ``e_req`` by more than :data:`RESTITUTION_TOLERANCE`, else None."""
+    if abs(e_achieved - e_req) <= RESTITUTION_TOLERANCE:
         return None
-    e = restitution_achieved(model_code, e_req, 10.0, v_floor=1.0, exponent=exponent)
-    if abs(e - e_req) <= RESTITUTION_TOLERANCE:
-        return None
-    return (f"collide.damping_model = {model_name} achieves a restitution of {e:.3f} for the requested "
+    return (f"collide.damping_model = {model_name} achieves a restitution of {e_achieved:.3f} for the requested "
             f"collide.restitution = {e_req:g} (the law is derived for e near 1): use damping_model = \"flores\"")

@@ -29,3 +29,19 @@ def test_achieved_restitution_is_speed_independent_above_the_floor():
     # χ ∝ 1/v_k and Hertz scaling make e independent of v once v ≥ v_floor (self-similar impact).
     code = DAMPING_CODE[DampingModel.flores]
     assert restitution_achieved(code, 0.5, 10.0) == pytest.approx(restitution_achieved(code, 0.5, 500.0), rel=1e-6)
+
+
+def test_collision_warns_when_the_damping_law_misses_the_requested_restitution():
+    # Reference: the comparison of these laws by Flores et al. (2011, Nonlinear Dyn.) — for e = 0.5
+    # Lankarani–Nikravesh returns
+    # e ≈ 0.72 and Hunt–Crossley ≈ 0.66, while their own law stays within a few hundredths. The
+    # guard must flag the first two and pass Flores (tolerance RESTITUTION_TOLERANCE = 0.05).
+    from flexnet_fe.contact.restitution import restitution_warning
+
+    for model, expected in ((DampingModel.lankarani_nikravesh, 0.725), (DampingModel.hunt_crossley, 0.663)):
+        e = restitution_achieved(DAMPING_CODE[model], 0.5, 10.0)
+        assert e == pytest.approx(expected, abs=0.01)
+        line = restitution_warning(model.value, 0.5, e)
+        assert line is not None and model.value in line and "flores" in line
+    e = restitution_achieved(DAMPING_CODE[DampingModel.flores], 0.5, 10.0)
+    assert abs(e - 0.5) <= 0.05 and restitution_warning("flores", 0.5, e) is None
