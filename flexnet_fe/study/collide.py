@@ -15,8 +15,6 @@ from flexnet_fe.study.scenes import CASE, FULL_COLLIDE, FULL_DEPLOY, QUICK_COLLI
 
 LOG = logging.getLogger("flexnet.study.collide")
 
-DEFAULTS = {"collide.pass_through_fraction": 0.1, "collide.dt_safety": 0.5, "collide.rope_split": 1,
-            "collide.crop": True, "collide.crop_wave_speed_factor": 4.0}
 
 
 def knob_exists(key: str, value) -> str | None:

@@ -12,7 +12,6 @@ from flexnet_fe.study.scenes import CASE, FULL_DEPLOY, QUICK_DEPLOY, case_with
 
 LOG = logging.getLogger("flexnet.study.deploy")
 
-DEFAULTS = {"net.subdivisions": 1, "deploy.safety_factor": 0.5, "deploy.area_pixel": 0.01}
 """The shipped values of the case (cases/radar_traction, schema defaults)."""
 
 

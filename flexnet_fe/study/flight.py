@@ -6,7 +6,6 @@ from __future__ import annotations
 from flexnet_fe.study.common import Context, Point, run_points
 from flexnet_fe.study.scenes import FLIGHT_CASE, case_with
 
-DEFAULTS = {"flight.dt": 1e-4}
 
 
 def points(quick: bool) -> list[Point]:

@@ -16,7 +16,6 @@ from flexnet_fe.study.scenes import CASE, case_with
 
 LOG = logging.getLogger("flexnet.study.shell")
 
-DEFAULTS = {"missile.mesh_size": 0.02, "shell.safety_factor": 0.9, "shell.rotary_inertia_scale": "auto"}
 
 QUICK_LOAD = ("shell.load.times=[0.0, 5e-5, 1e-4]", "shell.load.pressure=[0.0, 2e5, 0.0]",
               "shell.end_time=3e-4")
