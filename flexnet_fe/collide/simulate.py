@@ -35,7 +35,7 @@ from flexnet_fe.collide.refine import split_near_path
 from flexnet_fe.collide.metrics import FinContacts, MissileHistory, collision_metrics
 from flexnet_fe.collide.scene import HeldNet, MissileStart, fin_planes, place_missile
 from flexnet_fe.collide.timestep import StepChoice, choose_step, contact_stiffness
-from flexnet_fe.contact.law import DAMPING_CODE, hysteresis_factor
+from flexnet_fe.contact.law import DAMPING_CODE, DampingModel, hysteresis_factor
 from flexnet_fe.contact.restitution import restitution_achieved, restitution_warning
 from flexnet_fe.errors import NumericalError
 from flexnet_fe.missile.geometry import Missile
@@ -475,7 +475,7 @@ def _summary(rec: _Recorder, setup: Setup, loads: FinLoads, x_start, dt, steps, 
     warnings += metrics.pop("warnings")
     code = DAMPING_CODE[cfg.damping_model]
     e_ach = restitution_achieved(code, cfg.restitution, 10.0, 1.0, exponent=cfg.contact_exponent) if code else 1.0
-    bad_e = restitution_warning(cfg.damping_model.value, cfg.restitution, e_ach)
+    bad_e = restitution_warning(DampingModel(cfg.damping_model).value, cfg.restitution, e_ach)
     warnings += [bad_e] if bad_e else []
     summary = {
         # headline numbers: CFC-filtered peak (collide.metrics) and window-free Δv, impulses, duration
