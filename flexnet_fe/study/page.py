@@ -127,6 +127,9 @@ def write_page(out: Path) -> Path:
              "shared: absolute times vary with the load shown; compare within a table). Errors are relative "
              "to the fine reference computed in the same run (every knob at its finest), CPU time is the "
              "process CPU time of the stage call (all threads). Data: `<study>.csv` beside this page.", ""]
+    provenance = out / "PROVENANCE.md"  # hand-written: which tree and defaults the records describe
+    if provenance.is_file():
+        lines += ["## Which code these numbers describe", "", provenance.read_text().strip(), ""]
     acc = [n for n in ("deploy", "collide", "shell", "flight") if n in recs]
     if acc:
         lines += ["## Accuracy against cost", "", "| stage | default on the Pareto front | default within 2 % | "
