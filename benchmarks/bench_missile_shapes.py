@@ -11,7 +11,8 @@ from numba import njit
 
 from flexnet_fe.missile.config import MissileConfig
 from flexnet_fe.missile.build import build_missile
-from flexnet_fe.missile.mesh import read_msh_nodes_and_cells, write_meshes
+from flexnet_fe.missile.mesh import write_meshes
+from flexnet_fe.msh import read_msh_nodes_and_cells
 from flexnet_fe.missile.shapes import (body_closest_point, body_closest_scalar, closest_point,
                                        closest_point_scalar, pack_shapes, segment_core_closest)
 

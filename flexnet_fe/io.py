@@ -13,6 +13,8 @@ from typing import Any, Mapping
 
 import numpy as np
 
+from flexnet_fe.errors import FlexnetError
+
 
 def _current_umask() -> int:
     mask = os.umask(0)
@@ -75,3 +77,17 @@ def read_history_csv(path: Path) -> dict[str, np.ndarray]:
     """Read a CSV written by :func:`write_history_csv` into ``{name: float64 array}``."""
     arr = np.genfromtxt(path, delimiter=",", names=True, dtype=np.float64)
     return {n: np.atleast_1d(arr[n]) for n in arr.dtype.names}
+
+
+def pvd_entries(pvd: Path) -> list[tuple[float, Path]]:
+    """(time [s], data file) of every dataset of a ParaView ``.pvd`` collection, by time."""
+    import xml.etree.ElementTree as ET
+
+    pvd = Path(pvd)
+    try:
+        root = ET.parse(pvd).getroot()
+    except (OSError, ET.ParseError) as err:
+        raise FlexnetError(f"{pvd}: cannot read the collection ({err})") from None
+    out = [(float(ds.get("timestep", "nan")), pvd.parent / ds.get("file", ""))
+           for ds in root.iter("DataSet")]
+    return sorted(out, key=lambda e: e[0])

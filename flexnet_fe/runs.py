@@ -71,6 +71,7 @@ SHELL_MESHES = "meshes"
 BODY_MSH = "body.msh"
 """shell/meshes/: the missile body's surface mesh, read by the report's ParaView file."""
 SWEEP_TABLE = "sweep.csv"
+"""a sweep folder's table (``flexnet sweep``), and flight/: the flight stage's own ``[flight].sweep`` table."""
 BATCH_TABLE = "batch.csv"
 MAP_TABLE = "map.csv"
 """the engagement map's table (``flexnet_fe.engagement_map``; its picture has the same stem, .png)."""
@@ -330,6 +331,8 @@ def check_run_dir(path: Path) -> None:
     path = Path(path)
     if path.exists() and not path.is_dir():
         raise RunDirError(f"{path}: exists and is not a folder")
-    if path.is_dir() and any(path.iterdir()) and not is_run_dir(path):
+    # a run killed between taking its lock and writing its status leaves only run.lock: ours
+    own = {p.name for p in path.iterdir()} <= {LOCK} if path.is_dir() else True
+    if path.is_dir() and not own and not is_run_dir(path):
         raise RunDirError(f"{path}: folder is not empty and is not a run directory (no {STATUS}); "
                           f"choose an empty or new --out")

@@ -48,19 +48,9 @@ WIDE_KERNELS: dict[str, str] = {
 }
 
 UPWARD_IMPORTS: dict[tuple[str, str], str] = {
-    # The report reads net snapshots (.pvd) and Gmsh meshes (.msh) of the run directory through
-    # the one reader of each format, which today lives in a physics package. Owner: the lead
-    # (move pvd_entries and read_msh_nodes_and_cells into the base next to xdmf.py; net/ is
-    # helper E's, missile/ helper A's this session).
-    ("flexnet_fe.report.pictures", "flexnet_fe.net.snapshots"): "lead / helper E: pvd reader into the base",
-    ("flexnet_fe.report.scenes", "flexnet_fe.net.snapshots"): "lead / helper E: pvd reader into the base",
-    ("flexnet_fe.report.paraview", "flexnet_fe.missile.mesh"): "lead / helper A: .msh reader into the base",
 }
 
 FILE_NAME_LITERALS: dict[tuple[str, str], str] = {
-    ("flexnet_fe.missile.mesh", "body.msh"): "missile/mesh.py owner (lead): use runs.BODY_MSH",
-    ("flexnet_fe.flight.stage", "sweep.csv"): "flight stage owner: its built-in sweep table is another file "
-                                              "of the same name as runs.SWEEP_TABLE; name it in runs.py",
 }
 
 TWIN_FUNCTIONS: dict[frozenset, str] = {

@@ -33,7 +33,7 @@ from flexnet_fe.io import atomic_write_json, write_history_csv
 from flexnet_fe.missile.config import MissileConfig
 from flexnet_fe.missile.build import build_missile
 from flexnet_fe.frames import quat_from_matrix
-from flexnet_fe.runs import HISTORY
+from flexnet_fe.runs import HISTORY, SWEEP_TABLE
 
 G0 = 9.80665
 """standard gravity [m/s²], used only to express accelerations in g for people"""
@@ -455,7 +455,7 @@ def run_flight_sweep(flight: FlightConfig, altitude_m: float, stage_dir: Path, l
             f"{r:g}": first_miss_value(sw.values, misses, r) for r in REPORT_RADII_M}
         log.info("sweep %s (%s): misses %s m; first miss at %s", sw.parameter.value, model.value,
                  ", ".join(f"{m:.2f}" for m in misses), out[f"threshold{suffix}"])
-    write_history_csv(stage_dir / "sweep.csv", {k: np.asarray(v, dtype=float) for k, v in cols.items()})
+    write_history_csv(stage_dir / SWEEP_TABLE, {k: np.asarray(v, dtype=float) for k, v in cols.items()})
     plots.plot_sweep(cols, sw.parameter.value, flight.lethal_radius, stage_dir)
     atomic_write_json(stage_dir / "sweep.json", out)
     return out

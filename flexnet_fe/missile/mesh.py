@@ -20,7 +20,6 @@ process and never finalised here (see :func:`gmsh_model`).
 from __future__ import annotations
 
 import math
-from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -28,6 +27,8 @@ import numpy as np
 from flexnet_fe.missile.config import MissileConfig
 from flexnet_fe.missile.geometry import EDGE_NAMES, Fin, Missile, PrimKind
 from flexnet_fe.missile.build import build_missile
+from flexnet_fe.msh import gmsh_model, read_msh_nodes_and_cells
+from flexnet_fe.runs import BODY_MSH
 
 PHYSICAL_TAGS: dict[str, int] = {"surface": 1, "root": 11, "leading_edge": 12, "tip": 13,
                                  "trailing_edge": 14}
@@ -35,39 +36,6 @@ PHYSICAL_TAGS: dict[str, int] = {"surface": 1, "root": 11, "leading_edge": 12, "
 
 BODY_TAGS: dict[str, int] = {"body": 1, "nose": 2, "base": 3}
 """Physical-group tags of the body surface mesh."""
-
-
-_GMSH_READY = {"done": False}
-_SAVED_OPTIONS = ("General.Terminal", "Mesh.MeshSizeMax", "Mesh.MshFileVersion")
-
-
-@contextmanager
-def gmsh_model(name: str):
-    """A fresh gmsh model ``name`` in this process's gmsh, removed on exit.
-
-    gmsh is initialised once per process and never finalised here, so other modules that keep
-    gmsh initialised (e.g. the shell stage's mesh reader) are not broken by a finalise; the
-    global options this module changes are restored on exit.
-    """
-    import gmsh
-
-    if not _GMSH_READY["done"]:
-        gmsh.initialize()  # a second initialise elsewhere only prints a warning (gmsh 4.8)
-        _GMSH_READY["done"] = True
-    try:
-        gmsh.model.add(name)
-    except Exception:  # gmsh was finalised by someone else since: initialise again
-        gmsh.initialize()
-        gmsh.model.add(name)
-    saved = {k: gmsh.option.getNumber(k) for k in _SAVED_OPTIONS}
-    gmsh.option.setNumber("General.Terminal", 0)
-    try:
-        yield gmsh
-    finally:
-        gmsh.model.setCurrent(name)
-        gmsh.model.remove()
-        for k, v in saved.items():
-            gmsh.option.setNumber(k, v)
 
 
 def fin_divisions(fin: Fin, mesh_size: float) -> tuple[int, int]:
@@ -146,30 +114,12 @@ def write_meshes(cfg: MissileConfig, out_dir: Path) -> dict[str, Path]:
             gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
             gmsh.write(str(path))
         paths[fin.name] = path
-    path = out_dir / "body.msh"
+    path = out_dir / BODY_MSH
     with gmsh_model("body") as gmsh:
         build_body_model(gmsh, missile, cfg.mesh_size)
         gmsh.write(str(path))
     paths["body"] = path
     return paths
-
-
-def read_msh_nodes_and_cells(path: Path, dim: int = 2):
-    """Node coordinates [m] (n, 3) and, per gmsh element type of dimension ``dim``, the
-    connectivity as 0-based node indices: (x, {element type name: (k, nodes per element)})."""
-    with gmsh_model("read") as gmsh:
-        gmsh.merge(str(path))
-        tags, x, _ = gmsh.model.mesh.getNodes()
-        order = np.argsort(tags)
-        index = np.empty(int(tags.max()) + 1, np.int64)
-        index[tags[order]] = np.arange(tags.size)
-        x = np.asarray(x).reshape(-1, 3)
-        cells = {}
-        types, _, conn = gmsh.model.mesh.getElements(dim)
-        for t, c in zip(types, conn):
-            name, _, _, nn, _, _ = gmsh.model.mesh.getElementProperties(t)
-            cells[name] = index[np.asarray(c, np.int64)].reshape(-1, nn)
-    return x, cells
 
 
 def fin_outline_from_msh(path: Path) -> tuple[np.ndarray, float]:

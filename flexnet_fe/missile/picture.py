@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from flexnet_fe.missile.mesh import read_msh_nodes_and_cells
+from flexnet_fe.msh import read_msh_nodes_and_cells
 
 _VTK_QUAD, _VTK_TRIANGLE = 9, 5
 

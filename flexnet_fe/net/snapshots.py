@@ -8,7 +8,6 @@ from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
-from flexnet_fe.errors import FlexnetError
 from flexnet_fe.io import atomic_write_text
 
 
@@ -52,17 +51,3 @@ def write_pvd(path: Path, entries: list[tuple[float, str]]) -> None:
     atomic_write_text(Path(path), (
         '<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">\n'
         f"  <Collection>\n{rows}\n  </Collection>\n</VTKFile>\n"))
-
-
-def pvd_entries(pvd: Path) -> list[tuple[float, Path]]:
-    """(time [s], data file) of every dataset of a ParaView ``.pvd`` collection, by time."""
-    import xml.etree.ElementTree as ET
-
-    pvd = Path(pvd)
-    try:
-        root = ET.parse(pvd).getroot()
-    except (OSError, ET.ParseError) as err:
-        raise FlexnetError(f"{pvd}: cannot read the collection ({err})") from None
-    out = [(float(ds.get("timestep", "nan")), pvd.parent / ds.get("file", ""))
-           for ds in root.iter("DataSet")]
-    return sorted(out, key=lambda e: e[0])

@@ -80,7 +80,7 @@ class MissileFiles:
 
 def read_body(msh: Path) -> Part:
     """The body surface from the missile mesher's ``body.msh`` (gmsh file, frame B [m])."""
-    from flexnet_fe.missile.mesh import read_msh_nodes_and_cells
+    from flexnet_fe.msh import read_msh_nodes_and_cells
 
     if not Path(msh).is_file():
         raise FlexnetError(f"{msh}: no such file (the body surface mesh)")

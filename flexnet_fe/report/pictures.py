@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from flexnet_fe.errors import FlexnetError
-from flexnet_fe.net.snapshots import pvd_entries
+from flexnet_fe.io import pvd_entries
 from flexnet_fe.report.units import PA_TO_MPA
 
 ENVELOPE_FIELD = "peak_von_mises_pa"

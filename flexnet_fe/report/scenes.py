@@ -145,7 +145,7 @@ def render_missile_stress(missile_xdmf: str, envelope_xdmf: str, png: str, time_
 def _pvd_nearest(pvd: Path, t: float):
     import pyvista as pv
 
-    from flexnet_fe.net.snapshots import pvd_entries
+    from flexnet_fe.io import pvd_entries
 
     entries = [e for e in pvd_entries(pvd) if e[1].is_file()]
     if not entries:
@@ -171,7 +171,7 @@ def _flight(missile_pvd: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(first centre, last centre, unit flight direction) of the missile snapshots [m]."""
     import pyvista as pv
 
-    from flexnet_fe.net.snapshots import pvd_entries
+    from flexnet_fe.io import pvd_entries
 
     entries = [e for e in pvd_entries(missile_pvd) if e[1].is_file()]
     if len(entries) < 2:
@@ -232,7 +232,7 @@ def render_animation(net_pvd: str, missile_pvd: str, gif: str, fps: float = 6.0)
     import imageio.v2 as imageio
     import pyvista as pv
 
-    from flexnet_fe.net.snapshots import pvd_entries
+    from flexnet_fe.io import pvd_entries
 
     nets = [e for e in pvd_entries(Path(net_pvd)) if e[1].is_file()]
     mis = {round(t, 12): f for t, f in pvd_entries(Path(missile_pvd)) if f.is_file()}

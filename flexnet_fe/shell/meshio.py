@@ -16,7 +16,7 @@ from mpi4py import MPI
 import gmsh
 from dolfinx.io import gmshio
 
-from flexnet_fe.missile.mesh import gmsh_model  # one gmsh session per process, shared
+from flexnet_fe.msh import gmsh_model  # one gmsh session per process, shared
 
 EDGE_GROUPS = ("root", "leading_edge", "tip", "trailing_edge")
 

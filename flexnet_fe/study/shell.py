@@ -25,7 +25,8 @@ QUICK_LOAD = ("shell.load.times=[0.0, 5e-5, 1e-4]", "shell.load.pressure=[0.0, 2
 def fin_mesh(missile_cfg, fin_name: str, out: Path) -> Path:
     """``<fin>.msh`` of one fin at ``missile_cfg.mesh_size`` (the missile mesher's own model)."""
     from flexnet_fe.missile.build import build_missile
-    from flexnet_fe.missile.mesh import build_fin_model, gmsh_model
+    from flexnet_fe.missile.mesh import build_fin_model
+    from flexnet_fe.msh import gmsh_model
 
     fin = next(f for f in build_missile(missile_cfg).fins if f.name == fin_name)
     out.mkdir(parents=True, exist_ok=True)

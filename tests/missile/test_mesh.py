@@ -12,8 +12,8 @@ import pytest
 from flexnet_fe.missile.config import MissileConfig
 from flexnet_fe.missile.geometry import EDGE_NAMES
 from flexnet_fe.missile.build import build_missile
-from flexnet_fe.missile.mesh import (BODY_TAGS, PHYSICAL_TAGS, gmsh_model,
-                                     read_msh_nodes_and_cells, write_meshes)
+from flexnet_fe.missile.mesh import BODY_TAGS, PHYSICAL_TAGS, write_meshes
+from flexnet_fe.msh import gmsh_model, read_msh_nodes_and_cells
 from flexnet_fe.missile.shapes import (PART_BODY, PART_NOSE, body_closest_point, closest_points,
                                        pack_shapes)
 

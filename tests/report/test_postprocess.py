@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from flexnet_fe.net.snapshots import pvd_entries
+from flexnet_fe.io import pvd_entries
 
 from .synthetic import ENVELOPE_VM_PA, make_run
 
