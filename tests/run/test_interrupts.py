@@ -47,6 +47,11 @@ def test_signal_in_deploy(tmp_path, name):
     run = tmp_path / "run"
     proc = start_cli("run", DEPLOY, "--out", run, *LONG)
     wait_for_state(run, "deploy", "running", proc)
+    # the status says "running" a moment before the stage's partial folder and log exist; signal
+    # once there is output to keep (under two test workers the gap was hit: nothing was kept)
+    end = time.monotonic() + 60
+    while not (run / ".deploy.partial" / "log.txt").is_file() and time.monotonic() < end:
+        time.sleep(0.02)
     rc, err = interrupt(proc, sig)
     assert rc == code, err
     last = err.strip().splitlines()[-1]
