@@ -58,6 +58,11 @@ def build_fin_model(gmsh, fin: Fin, mesh_size: float) -> None:
     geo.mesh.setTransfiniteSurface(surf, "Left", pts)
     geo.mesh.setRecombine(2, surf)
     geo.synchronize()
+    _tag_and_generate(gmsh, surf, lines)
+
+
+def _tag_and_generate(gmsh, surf: int, lines) -> None:
+    """Name the fin surface and its four edges (:data:`PHYSICAL_TAGS`) and mesh it in 2-D."""
     gmsh.model.addPhysicalGroup(2, [surf], PHYSICAL_TAGS["surface"])
     gmsh.model.setPhysicalName(2, PHYSICAL_TAGS["surface"], "surface")
     for k, name in enumerate(EDGE_NAMES):
@@ -191,12 +196,7 @@ def write_refined_fin_mesh(corners: np.ndarray, mesh_size: float, points: np.nda
         try:
             for k, v in opts.items():
                 gmsh.option.setNumber(k, v)
-            gmsh.model.addPhysicalGroup(2, [surf], PHYSICAL_TAGS["surface"])
-            gmsh.model.setPhysicalName(2, PHYSICAL_TAGS["surface"], "surface")
-            for k, name in enumerate(EDGE_NAMES):
-                gmsh.model.addPhysicalGroup(1, [lines[k]], PHYSICAL_TAGS[name])
-                gmsh.model.setPhysicalName(1, PHYSICAL_TAGS[name], name)
-            gmsh.model.mesh.generate(2)
+            _tag_and_generate(gmsh, surf, lines)
             types, _, _ = gmsh.model.mesh.getElements(2)
             if any(gmsh.model.mesh.getElementProperties(t)[3] != 4 for t in types):
                 raise RuntimeError("refined fin mesh is not all-quadrilateral")

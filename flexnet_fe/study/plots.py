@@ -120,9 +120,18 @@ def dt_map_chart(rows: list[dict], path: Path) -> None:
         ax.set_title({"net": "net (deploy, forced dt)", "collide": "collision (dt_scale)",
                       "shell": "shell (plate, dt = r·dt_crit)"}[m], fontsize=10)
         ax.grid(True, which="both", alpha=0.3)
-        h, lab = ax.get_legend_handles_labels()
-        uniq = dict(zip(lab, h))
-        ax.legend(uniq.values(), uniq.keys(), fontsize=7)
+        _legend_once(ax)
+    _save(fig, path)
+
+
+def _legend_once(ax) -> None:
+    """A legend with one entry per label (scatter points repeat their labels)."""
+    h, lab = ax.get_legend_handles_labels()
+    uniq = dict(zip(lab, h))
+    ax.legend(uniq.values(), uniq.keys(), fontsize=7)
+
+
+def _save(fig, path: Path) -> None:
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
@@ -154,12 +163,8 @@ def contact_chart(rows: list[dict], path: Path) -> None:
         _plain(ax, "x")
         ax.set_title(f"travel per step = {f:g} × min(r, h/2); label = penetration / (r + h/2)", fontsize=9)
         ax.grid(True, which="both", alpha=0.3)
-        h, lab = ax.get_legend_handles_labels()
-        uniq = dict(zip(lab, h))
-        ax.legend(uniq.values(), uniq.keys(), fontsize=7)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+        _legend_once(ax)
+    _save(fig, path)
 
 
 def damping_chart(rows: list[dict], path: Path) -> None:
