@@ -33,6 +33,13 @@ per step on a tiny model; days on a real one)."""
 F8 = 8
 """bytes per float64"""
 
+SHELL_STEP_FACTOR = 0.25
+"""dt / (safety × h / c_p) of the shell stage on the paper fins [-]: measured 0.25 on the 20 mm
+structured fin meshes (their narrowest quads near the tip are ≈ 0.4 h; the Mindlin shear and
+rotary-inertia modes lower it further) and 0.45–0.54 at local sizes 5 / 2.5 / 1.25 mm
+(radar × traction, 2026-11-23, /tmp/lead/shell_conv.log): 0.25 keeps the estimate an upper
+bound on the steps within ≈ 2×."""
+
 BASE_PROCESS = 0.45e9
 """Memory of a flexnet process before any stage allocates [bytes]: Python with numpy, numba,
 dolfinx/PETSc and gmsh imported (measured: 419 MB maximum resident set of a 121-node deploy)."""
@@ -145,19 +152,18 @@ def _mem_driver(a: float, b: float, field_a: str, field_b: str) -> str:
 
 
 def collide_cost(case, file) -> StageCost:
-    """Steps: the pass-through limit of ``collide/timestep.py``, dt ≤ pass_through_fraction ×
-    min(rope radius, fin half-thickness) / impact speed (the contact and spring limits can only
-    make dt smaller). Memory: the process, the held net and its work arrays (≈ 100 floats per
-    node and per segment, as deploy; not measured separately) and ≈ 40 history columns per output
-    row; disk: snapshots (60 B per node) × snapshots."""
+    """Steps: the stage's own step rule (``collide.timestep.choose_step``: rope springs, contact,
+    travel per step) evaluated at the lightest node the missile can reach before the run knows the
+    held net: with ``rope_split`` k > 1 a node between two pieces of rest length l0/k (mass ρA l0/k,
+    the split's re-lumping, ``collide/refine.py``), else an interior knot (2ρA l0); the most
+    segments at a node 4 (a rotary net's hub: its warps). Memory: the process, the held net and
+    its work arrays (≈ 100 floats per node and per segment, as deploy; not measured separately)
+    and ≈ 40 history columns per output row; disk: snapshots (60 B per node) × snapshots."""
     cc, net = case.collide, case.net
     nodes, segs, l0, c = check_net(net, file)
-    missile = case.missile
-    fin_half = 0.5 * min(missile.wings.thickness, missile.rudders.thickness)
-    energy = 0.5 * _missile_mass(missile) * cc.impact_speed * cc.impact_speed
+    energy = 0.5 * _missile_mass(case.missile) * cc.impact_speed * cc.impact_speed
     _finite(file, "collide.impact_speed", "missile kinetic energy ½mv² [J]", energy)
-    gap = min(0.5 * net.rope_diameter, fin_half)
-    dt = cc.dt_safety * cc.pass_through_fraction * gap / cc.impact_speed
+    dt = _collide_step(case, l0)
     rows = cc.duration / cc.output_interval
     mem = BASE_PROCESS + 100 * F8 * (nodes + segs) + 40 * F8 * rows
     cost = StageCost("collide", nodes, 3 * nodes + 6, cc.duration / dt, mem,
@@ -166,8 +172,30 @@ def collide_cost(case, file) -> StageCost:
                       "memory": _mem_driver(100 * F8 * (nodes + segs), 40 * F8 * rows, "net.mesh_size",
                                             "collide.output_interval"), "disk": "collide.output_interval"})
     cost.detail = (f"{rows:.3g} history rows = collide.duration / collide.output_interval, "
-                   f"dt ≤ {dt:.3g} s from the pass-through limit")
+                   f"dt ≈ {dt:.3g} s (collide step rule, rope_split {cc.rope_split})")
     return cost
+
+
+def _collide_step(case, l0: float) -> float:
+    """dt [s] of ``collide.timestep.choose_step`` for the case (``collide_cost``); l0 [m] the
+    deployed net's segment rest length."""
+    from flexnet_fe.collide.timestep import choose_step, contact_stiffness
+    from flexnet_fe.net.forces import rope_material
+    from flexnet_fe.net.topology import rope_area
+
+    cc, net, m = case.collide, case.net, case.missile
+    rope = rope_material(net)
+    k = int(cc.rope_split)
+    mu = rope.density * float(rope_area(rope.diameter))  # rope mass per length [kg/m]
+    piece = l0 / k
+    m_min = mu * piece if k > 1 else 2.0 * mu * l0
+    n_seg = 4 if net.kind == "traction" else max(4, int(net.warps))
+    fin_half = 0.5 * min(m.wings.thickness, m.rudders.thickness)
+    k_body, k_fin = contact_stiffness(cc, rope.radius, rope.transverse_modulus, rope.poisson_ratio, fin_half,
+                                      0.5 * m.body_diameter)
+    ea = np.array([rope.youngs_modulus * float(rope_area(rope.diameter)) / piece])
+    mass = np.array([mu * piece])
+    return choose_step(cc, ea, mass, mass, m_min, n_seg, rope.radius, fin_half, max(k_body, k_fin)).dt
 
 
 def _missile_mass(missile) -> float:
@@ -181,25 +209,29 @@ def shell_cost(case, file) -> StageCost:
     """Fin mesh: quadrilaterals of size h = missile.mesh_size on the 4 wings and 4 rudders
     (trapezoid area (c_r + c_t)/2 · b each); 6 DOFs per node. Gmsh needs ≈ 1 kB per element and
     the explicit solver ≈ 2 kB per DOF (the 54-wide stiffness rows in BAIJ plus lumped mass,
-    state and stress work vectors). Steps: dt_crit ≈ h / c_p with c_p = √(E/(ρ(1−ν²))), times
-    the safety factor; end time = collide duration + end_margin unless given. Disk: 8 stress and
+    state and stress work vectors). Steps: dt ≈ safety × β h_min / c_p with c_p = √(E/(ρ(1−ν²))),
+    h_min = the smaller of missile.mesh_size and shell.local_mesh_size (the refined zones set the
+    step of the whole fin) and β = :data:`SHELL_STEP_FACTOR`; end time = collide duration + end_margin unless given. Disk: 8 stress and
     displacement fields per output, 40 outputs per fin by default. Steps are per fin (the fins
     are solved one after the other)."""
     m, sh = case.missile, case.shell
     h = m.mesh_size
+    h_min = min(h, sh.local_mesh_size or h)
     area = sum(4 * 0.5 * (f.root_chord + f.tip_chord) * f.span for f in (m.wings, m.rudders))
     elements = _finite(file, "missile.mesh_size", "fin element count", area / (h * h))
     nodes = elements * 1.1
     mat = m.material
     cp = math.sqrt(mat.youngs_modulus / (mat.density * (1 - mat.poisson_ratio * mat.poisson_ratio)))
     end = sh.end_time or (case.collide.duration + sh.end_margin)
-    dt = sh.safety_factor * h / cp
+    dt = sh.safety_factor * SHELL_STEP_FACTOR * h_min / cp
     outputs = end / sh.field_interval if sh.field_interval else 40
     mem = BASE_PROCESS + max(1e3 * elements, 2e3 * 6 * nodes)
     cost = StageCost("shell", nodes, 6 * nodes, end / dt, mem, 8 * F8 * elements * outputs,
-                     {"nodes": "missile.mesh_size", "steps": "missile.mesh_size", "memory": "missile.mesh_size",
+                     {"nodes": "missile.mesh_size", "steps": "shell.local_mesh_size" if h_min < h else "missile.mesh_size",
+                      "memory": "missile.mesh_size",
                       "disk": "shell.field_interval"})
-    cost.detail = f"{elements:.3g} fin elements of size missile.mesh_size, dt ≈ {dt:.3g} s, end {end:.3g} s"
+    cost.detail = (f"{elements:.3g} fin elements of size missile.mesh_size (refined zones not counted), "
+                   f"dt ≈ {dt:.3g} s from the smallest element size {h_min:.3g} m, end {end:.3g} s")
     return cost
 
 
