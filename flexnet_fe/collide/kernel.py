@@ -115,6 +115,22 @@ def _near_missile(model, pa, pb):
 
 
 @njit(cache=True)
+def _may_touch(model, pa, pb):
+    """Broad phase of one capsule a–b [m] (B): the missile's bounding cylinder, then the body's
+    radius or some fin's slab (the tests ``segment_contacts`` makes before any narrow phase).
+    Calling ``segment_contacts`` costs ≈ 1 µs even when it finds nothing (it takes the model,
+    state and work records), so the step skips it for capsules that cannot touch."""
+    if not _near_missile(model, pa, pb):
+        return False
+    if _axis_distance(pa, pb) <= model.bbox[3] + model.rope_radius:
+        return True
+    for fi in range(model.fin_half.shape[0]):
+        if _near_fin(model, fi, pa, pb):
+            return True
+    return False
+
+
+@njit(cache=True)
 def _axis_distance(pa, pb):
     """Smallest distance [m] of the segment a–b (B) from the missile axis x_b (closed form)."""
     dy, dz = pb[1] - pa[1], pb[2] - pa[2]
@@ -340,7 +356,7 @@ def _step_contacts(model, state, wk, dt, step):
     pbn = wk.pbn
     for e in range(model.seg.shape[0]):
         i, j = model.seg[e, 0], model.seg[e, 1]
-        if not state.alive[e] or not _near_missile(model, pbn[i], pbn[j]):
+        if not state.alive[e] or not _may_touch(model, pbn[i], pbn[j]):
             base = e * (1 + nf)
             for p in range(1 + nf):
                 if state.vk[base + p] != 0.0:
