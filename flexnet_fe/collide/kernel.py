@@ -345,7 +345,9 @@ def _rope_forces(model, state, wk, dt):
             f[j, 0] -= t * u0
             f[j, 1] -= t * u1
             f[j, 2] -= t * u2
-            state.acc[A_DISS_ROPE] += (t - model.k[e] * max(stretch, 0.0)) * ldot * dt
+        # the dashpot's share T − K s: also when T is cut to 0 (a stretched rope contracting so
+        # fast that K s + c l̇ < 0 cannot push), the dashpot then takes the spring's −K s l̇ > 0
+        state.acc[A_DISS_ROPE] += (t - model.k[e] * max(stretch, 0.0)) * ldot * dt
 
 
 @njit(cache=True)

@@ -170,6 +170,28 @@ def test_rope_breaks_at_its_breaking_load(radar, scenes):
     assert scenes.total_energy(km, st, radar) == pytest.approx(e0, rel=1e-3)
 
 
+def test_rope_that_cannot_push_books_its_spring_energy_as_damping(radar, scenes):
+    # Reference: conservation of energy, far from the missile (no contact). A segment stretched by
+    # 1 mm (K = 1000 N/m, ½ K s² = 0.5 mJ) whose free 1 g end moves towards the held end at 1 m/s
+    # with a dashpot c = 10 N s/m: K s + c l̇ = −9 N < 0, so the rope (which cannot push) carries
+    # no force and the end flies on at 1 m/s while the spring relaxes. The spring's 0.5 mJ is
+    # taken by the dashpot (T − K s = −K s): kinetic + elastic + rope damping must stay at its
+    # initial 1 mJ up to the step error: the booked dissipation is the left sum Σ K s_n |v| dt =
+    # ½ K s0² + ½ K s0 |v| dt (s_n = s0 − n |v| dt), first order in dt. (A balance that dropped
+    # the dashpot's share lost half the energy at any dt.)
+    a = np.array([1.0, 0.0, 0.0])
+    k, s0, v = 1000.0, 1e-3, 1.0
+    for dt in (1e-6, 5e-7):
+        km, st = scenes.segment_scene(radar, a, a + [0.05 + s0, 0, 0], [0, 0, 0], [-v, 0, 0], mass=1e-3, k=k,
+                                      c=10.0, rest=0.05, free=(False, True))
+        e0 = scenes.total_energy(km, st, radar)
+        assert e0 == pytest.approx(1e-3, rel=1e-12)
+        assert K.advance(km, st, int(round(2e-3 / dt)), dt) == M.OK
+        step_error = 0.5 * k * s0 * v * dt
+        assert st.v[1, 0] == -v and st.acc[M.A_DISS_ROPE] == pytest.approx(0.5 * k * s0 ** 2 + step_error, rel=1e-6)
+        assert scenes.total_energy(km, st, radar) - e0 == pytest.approx(step_error, rel=1e-3)
+
+
 def test_broad_phase_never_drops_a_touching_pair(radar, scenes):
     # Reference: the exact stored energy Σ U(δ) over ALL (segment, part) pairs, computed here with
     # no broad phase (every fin's core and the body, ``missile.shapes``). The kernel's culls
