@@ -344,13 +344,6 @@ def _end_summary(summary: dict, run: _Run, rec: "_Recorder", cfg: CollideConfig,
     summary.update({"stop_reason": run.stop_reason, "end_time_s": float(c["t_s"][-1]), "force_at_end_n": force_end,
            "rope_split": int(cfg.rope_split), "rope_split_margin_m": float(cfg.rope_split_margin),
            "net_nodes": int(net.model.n_nodes), "net_segments": int(net.model.n_springs)})
-    if cfg.rope_split > 1:
-        l_min = float(np.min(net.rest_length))
-        if l_min < net.rope.diameter:
-            summary["warnings"].append(
-                f"collide: rope_split = {cfg.rope_split} makes rope segments of {l_min:.3g} m, shorter than the rope "
-                f"diameter {net.rope.diameter:.3g} m: neighbouring capsules overlap and the contact step rule no "
-                f"longer bounds a node's contact stiffness (radar_traction at rope_split = 16 blew up)")
     if run.stop_reason != "interaction_over":
         what = (f"contact force {force_end:.4g} N still acting" if force_end > 0 else
                 f"no contact, but the missile's tail is not {cfg.end_clearance:g} m past the net")
