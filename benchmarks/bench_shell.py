@@ -10,6 +10,11 @@ under mesh refinement (reproducible on any collision run directory).
         # --stages deploy,collide --out RUN_DIR`); re-meshes the fins at each size and runs the
         # shell stage on the recorded collision loads
     .venv/bin/python benchmarks/bench_shell.py case RUN_DIR     # the stage as the case runs it
+    .venv/bin/python benchmarks/bench_shell.py zone RUN_DIR FIN --time S [--part inplane|normal]
+                                [--local 0.005,0.0025,0.00125,0.000625]
+        # the static response to the largest contact event of FIN at time S, at each local
+        # mesh size: the structural peak outside its St-Venant zone and the largest von Mises on
+        # rings of radius 9–24 mm around it (is the zone-boundary peak converging?)
 
 Ratios are measured side by side in one run (the machine is shared: absolute times vary 2–3×);
 each timing is the best of several repeats.
@@ -273,6 +278,8 @@ def cmd_paper(args) -> dict:
     import tempfile
     rows = []
     shell_set = {"stvenant_radius_factor": args.factor}
+    if args.peak_interval:
+        shell_set["peak_interval"] = args.peak_interval
     local = [float(x) for x in args.local.split(",")] if args.local else []
     runs = [(h, None) for h in sizes] + [(sizes[-1] if sizes else 0.02, hl) for hl in local]
     for h, hl in runs:
@@ -301,17 +308,7 @@ def cmd_paper(args) -> dict:
                       f"{r['peak_bearing_pa'] / 1e6:.1f} MPa {r['peak_bearing_kind']})", flush=True)
         print(f"h = {1e3 * h:5.2f} mm: stage wall {s['bench_wall_s']:.1f} s", flush=True)
     for name in sorted({r["fin"] for r in rows}):
-        pk = [(r["mesh_size"], r["peak"]) for r in rows if r["fin"] == name]
-        if len(pk) >= 3:
-            (h1, s1), (h2, s2), (h3, s3) = pk[-3:]
-            if (s2 - s1) * (s3 - s2) > 0 and abs(s3 - s2) < abs(s2 - s1):
-                p = np.log(abs((s2 - s1) / (s3 - s2))) / np.log(h1 / h2)
-                ext = s3 + (s3 - s2) / ((h2 / h3) ** p - 1)
-                print(f"{name}: observed order {p:.2f}, Richardson limit {ext / 1e6:.2f} MPa, "
-                      f"finest mesh {100 * (s3 / ext - 1):+.2f} %")
-            else:
-                print(f"{name}: peaks {[f'{v / 1e6:.1f}' for _, v in pk]} MPa — not monotone, "
-                      f"no order")
+        _orders([(r["mesh_size"], r["peak"]) for r in rows if r["fin"] == name], name)
     return {"paper": rows}
 
 
@@ -330,6 +327,103 @@ def cmd_case(args) -> dict:
           f"(cold {walls[0]:.2f} s), {s['dofs']} DOFs, {s['steps']} steps")
     return {"case": {"mesh_size": h, "wall_warm_s": walls[-1], "wall_cold_s": walls[0],
                      "dofs": s["dofs"], "steps": s["steps"]}}
+
+
+def _static_event(run_dir: Path, fin: str, h_local: float, time_s: float, part: str,
+                  work: Path) -> dict:
+    """Static response of ``fin`` (mesh refined to ``h_local`` [m] at its loads) to the largest
+    contact event of the sample nearest ``time_s`` [s] (``part``: all, in-plane or normal
+    component): structural peak outside its zone, and ring maxima of the recovered von Mises."""
+    from mpi4py import MPI
+    from flexnet_fe.missile.build import build_missile
+    from flexnet_fe.missile.config import MissileConfig
+    from flexnet_fe.missile.mesh import write_meshes
+    from flexnet_fe.shell import hotspot, stage as stg
+    from flexnet_fe.shell.config import ShellConfig
+    from flexnet_fe.shell.meshio import load_fin_mesh
+    from flexnet_fe.shell.model import build_model
+    from flexnet_fe.shell.recovery import nodal_strains, shape_q1, stress_tensors
+    from flexnet_fe.shell.transfer import FinGeometry, contact_transfer
+
+    case = json.loads((run_dir / "resolved.json").read_text())
+    case = case.get("case", case)
+    mcfg = MissileConfig.model_validate({**case["missile"], "mesh_size": 0.02})
+    shell = ShellConfig.model_validate({**(case.get("shell") or {}), "local_mesh_size": h_local})
+    spec = {s.name: s for s in stg.fin_specs(build_missile(mcfg).fins,
+                                             write_meshes(mcfg, work / "meshes"))}[fin]
+    con = stg.read_fin_contacts(run_dir / "collide" / "fin_contacts.npz")
+    idx = con.fin_names.index(fin)
+    fm = load_fin_mesh(stg._fin_mesh_path(shell, spec, con, idx, work, MPI.COMM_WORLD),
+                       MPI.COMM_WORLD)
+    mat = ShellMaterial(thickness=spec.thickness, youngs_modulus=spec.youngs_modulus,
+                        poisson_ratio=spec.poisson_ratio, density=spec.density,
+                        yield_strength=spec.yield_strength)
+    model = build_model(fm, mat, supports=dict(shell.supports))
+    pl = model.fin.plane
+    k = int(np.argmin(np.abs(con.t - time_s)))
+    sel = np.flatnonzero((con.fin == idx) & (con.sample == k))
+    e = sel[np.argmax(np.linalg.norm(con.force[sel], axis=1))]
+    F = con.force[e] - (con.force[e] @ pl.n) * pl.n if part == "inplane" else (
+        (con.force[e] @ pl.n) * pl.n if part == "normal" else con.force[e])
+    fg = FinGeometry(mesh=model.V.mesh, V=model.V, origin=pl.origin, e1=pl.e1, e2=pl.e2, n=pl.n)
+    G = contact_transfer(fg, con.point[[e]], con.width[[e]], plane_tol=2 * mat.thickness)
+    u = api.static(model, np.asarray(G @ F).ravel())
+    R = recovery_for(model)
+    x = model.V.tabulate_dof_coordinates()
+    p0 = con.point[e] - ((con.point[e] - pl.origin) @ pl.n) * pl.n
+    rex = float(hotspot.exclusion_radius(mat.thickness, con.width[[e]],
+                                         shell.stvenant_radius_factor)[0])
+    s6 = nodal_strains(R, u)
+    t = mat.thickness
+
+    def vm(s):
+        return np.maximum(von_mises(stress_tensors(s, R, 0.5 * t)),
+                          von_mises(stress_tensors(s, R, -0.5 * t)))
+
+    near = np.flatnonzero(np.linalg.norm(x[R.cells].mean(axis=1) - p0, axis=1) < 0.045)
+    g = np.linspace(0.0, 1.0, 21)
+    N = shape_q1(np.repeat(g, 21), np.tile(g, 21))
+    r = np.linalg.norm(np.einsum("mk,ckd->cmd", N, x[R.cells[near]]).reshape(-1, 3) - p0, axis=1)
+    vq = vm(np.einsum("mk,ckd->cmd", N, s6[R.cells[near]]).reshape(-1, 6))
+    vn = np.where(np.linalg.norm(x - p0, axis=1) < rex, 0.0, vm(s6))
+    node = int(np.argmax(vn))
+    pk = locate_peak(R, u, node, x, pl.origin, exclude=(p0[None], np.array([rex])))
+    rings = {f"ring_{int(round(rr * 1e3))}mm_pa": float(vq[(r >= rr) & (r < rr + 1e-4)].max())
+             for rr in (9e-3, 12e-3, 15e-3, 18e-3, 24e-3)}
+    return dict(fin=fin, local=h_local, part=part, force_n=[float(v) for v in F],
+                dofs=int(len(u)), r_ex=rex, peak_pa=pk.value,
+                peak_r_m=float(np.linalg.norm(pk.location - p0)), zz=pk.error_estimate_rel,
+                **rings)
+
+
+def cmd_zone(args) -> dict:
+    import tempfile
+    rows = []
+    for h in (float(v) for v in args.local.split(",")):
+        with tempfile.TemporaryDirectory() as td:
+            r = _static_event(Path(args.run_dir), args.fin, h, args.time, args.part, Path(td))
+        rows.append(r)
+        rings = ", ".join(f"{k[5:-3]} {v / 1e6:.1f}" for k, v in r.items() if k.startswith("ring"))
+        print(f"{args.fin} {args.part} static, {1e3 * h:.3f} mm at the loads, {r['dofs']} DOFs: "
+              f"structural peak {r['peak_pa'] / 1e6:.2f} MPa at r = {1e3 * r['peak_r_m']:.2f} mm "
+              f"(r_ex {1e3 * r['r_ex']:.1f} mm, ZZ {100 * r['zz']:.1f} %); ring maxima [MPa]: "
+              f"{rings}", flush=True)
+    _orders([(r["local"], r["peak_pa"]) for r in rows], args.fin)
+    return {"zone": rows}
+
+
+def _orders(pk, name: str) -> None:
+    """Observed order and Richardson limit from the last three (h, value) pairs."""
+    if len(pk) < 3:
+        return
+    (h1, s1), (h2, s2), (h3, s3) = pk[-3:]
+    if (s2 - s1) * (s3 - s2) > 0 and abs(s3 - s2) < abs(s2 - s1):
+        p = np.log(abs((s2 - s1) / (s3 - s2))) / np.log(h1 / h2)
+        ext = s3 + (s3 - s2) / ((h2 / h3) ** p - 1)
+        print(f"{name}: observed order {p:.2f}, Richardson limit {ext / 1e6:.2f} MPa, "
+              f"finest mesh {100 * (s3 / ext - 1):+.2f} %")
+    else:
+        print(f"{name}: peaks {[f'{v / 1e6:.1f}' for _, v in pk]} MPa — not monotone, no order")
 
 
 def reference_run(K, minv, wfix, normal, loads, dt: float, n_steps: int, alpha: float,
@@ -474,12 +568,20 @@ def main() -> None:
                    help="local element sizes around the contacts [m] (on the last --sizes mesh)")
     p.add_argument("--factor", type=float, default=2.0,
                    help="shell.stvenant_radius_factor (0: peaks at the loads included)")
+    p.add_argument("--peak-interval", type=float, default=None,
+                   help="shell.peak_interval [s] (default: the case's)")
+    z = sub.add_parser("zone")
+    z.add_argument("run_dir")
+    z.add_argument("fin")
+    z.add_argument("--time", type=float, required=True)
+    z.add_argument("--part", default="all", choices=("all", "inplane", "normal"))
+    z.add_argument("--local", default="0.005,0.0025,0.00125,0.000625")
     sub.add_parser("agreement")
     c = sub.add_parser("case")
     c.add_argument("run_dir")
     args = ap.parse_args()
     out = {"kernel": cmd_kernel, "plate": cmd_plate, "paper": cmd_paper, "case": cmd_case,
-           "agreement": cmd_agreement}[
+           "agreement": cmd_agreement, "zone": cmd_zone}[
         args.cmd](args)
     print(json.dumps(out, default=float))
 

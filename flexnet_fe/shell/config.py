@@ -63,6 +63,13 @@ class ShellConfig(Section):
     history_interval: Positive = Field(
         2e-6, description="time between stress samples (history.csv rows, envelope, peak "
                           "search) [s]; rounded to a whole number of steps (at least 1)")
+    peak_interval: Positive = Field(
+        2.5e-7, description="time between the stress evaluations that find the peaks and the "
+                            "envelope (not written to history.csv) [s]; rounded to a whole number "
+                            "of steps (at least 1), history_interval then to a multiple of it. A "
+                            "rope load rises over one 10 µs contact sample and the stress peak it "
+                            "causes is 3–5 µs wide: sampled every 2 µs it reads 2–6 % low "
+                            "(docs/validation.md)")
     field_interval: Positive | None = Field(
         None, description="time between XDMF field outputs [s]; default: end_time / 10 (plus a "
                           "frame at each fin's peak instant)")

@@ -13,11 +13,13 @@ j > i received B_ijᵀ x_i already, so the product, the load and the update are 
 the matrix and the vectors (the matrix streams once per step). The strain energy ½ uᵀKu of the
 previous state, f·Δu and the kinetic energy fall out of the same sweep.
 
-Stress sampling (every ``sample_every`` steps) is :func:`flexnet_fe.shell.recovery.sample_nodes`
-called from inside the kernel: nodal surface stresses by lumped L2 projection, per-node envelope,
-global structural peak (value, node, time; nodes inside the St-Venant zones of the contact loads
-active at that instant left out, :mod:`flexnet_fe.shell.hotspot`) and a copy of u at the
-running peak.
+Stress sampling is :func:`flexnet_fe.shell.recovery.sample_nodes` called from inside the kernel:
+nodal surface stresses by lumped L2 projection, per-node envelope, global structural peak (value,
+node, time; nodes inside the St-Venant zones of the contact loads active at that instant left
+out, :mod:`flexnet_fe.shell.hotspot`) and a copy of u at the running peak — every ``peak_every``
+steps (the peak must be resolved in time: a rope load rises over one 10 µs contact sample and
+the stress peak it causes is a few µs wide); the history rows (energies, per-sample maxima) are
+written every ``sample_every`` steps, a multiple of it.
 
 The block matrix is built once from the assembled CSR arrays (:func:`upper_blocks`): linear in
 the number of non-zeros, no PETSc AIJ → SBAIJ conversion.
@@ -333,6 +335,10 @@ class StepParams(NamedTuple):
     beta: float
     growth_limit: float
     sample_every: int
+    """history rows (energies, per-sample maxima) every that many steps"""
+    peak_every: int = 0
+    """stresses for the running peaks and the envelope every that many steps (a divisor of
+    sample_every; 0: at the history rows only)"""
 
 
 class RunState(NamedTuple):
@@ -537,7 +543,8 @@ def advance(D, P, R, St, H, n_steps):
 @njit(cache=True)
 def advance_steps(D, P, R, St, H, n_steps):
     """Advance ``n_steps`` central-difference steps from step ``St.scal[S_STEP]``, sampling
-    stresses and energies into ``H`` at every multiple of ``P.sample_every``.
+    stresses and energies into ``H`` at every multiple of ``P.sample_every`` and tracking the
+    peaks and the envelope at every multiple of ``P.peak_every`` too.
 
     Scheme (Belytschko, Liu & Moran 2000, Box 6.1), velocities at half steps:
         a_n = M⁻¹ [f(t_n) − K (u_n + β v_{n−½})] − α v_{n−½};  v_{n+½} = v_{n−½} + dt a_n
@@ -596,6 +603,8 @@ def advance_steps(D, P, R, St, H, n_steps):
                     return step
             else:
                 pending = row
+        elif P.peak_every > 0 and step % P.peak_every == 0:
+            _track(D, R, St, H, step, step * P.dt)
     if pending >= 0:  # the call ends on a sample: its strain energy by one explicit product
         split_product(D.K, St.u, St.y)
         se = 0.0
@@ -630,9 +639,10 @@ def _mark_zones(D, t, mask, value):
 
 
 @njit(cache=True)
-def _sample(D, R, St, H, row, step, t):
-    """Nodal stresses of the current u; history row, envelope (all nodes) and running peaks:
-    the structural peak over the nodes outside the active St-Venant zones, and the raw one."""
+def _track(D, R, St, H, step, t):
+    """Nodal stresses of the current u (into ``H.nodal``); the envelope (all nodes) and the
+    running peaks: the structural peak over the nodes outside the active St-Venant zones, and the
+    raw one. Returns (structural max vm, its node, max p1, max |u|) of this instant."""
     sc = St.scal
     vm_raw, _, _, umax = sample_nodes(R, St.u, H.nodal)
     _mark_zones(D, t, H.mask, 1)
@@ -649,10 +659,6 @@ def _sample(D, R, St, H, row, step, t):
                 vm_max, node = vm, i
             p1_max = max(p1_max, p1)
     _mark_zones(D, t, H.mask, 0)
-    H.vm[row] = vm_max
-    H.node[row] = node
-    H.p1[row] = p1_max
-    H.umax[row] = umax
     sc[S_PEAK_RAW] = max(sc[S_PEAK_RAW], vm_raw)
     if vm_max > sc[S_PEAK_VM]:
         sc[S_PEAK_VM] = vm_max
@@ -663,3 +669,14 @@ def _sample(D, R, St, H, row, step, t):
     if p1_max > sc[S_PEAK_P1]:
         sc[S_PEAK_P1] = p1_max
         sc[S_PEAK_P1_T] = t
+    return vm_max, node, p1_max, umax
+
+
+@njit(cache=True)
+def _sample(D, R, St, H, row, step, t):
+    """:func:`_track`, and the history row ``row`` of this instant's maxima."""
+    vm_max, node, p1_max, umax = _track(D, R, St, H, step, t)
+    H.vm[row] = vm_max
+    H.node[row] = node
+    H.p1[row] = p1_max
+    H.umax[row] = umax

@@ -91,14 +91,16 @@ def run(model: ShellModel, loads: LoadHistory, R: RecoveryData, *, dt: float, n_
         sample_every: int, frame_every: int, alpha: float = 0.0, beta: float = 0.0,
         growth_limit: float = 10.0, frame: FrameFn | None = None,
         backend: Backend = Backend.AUTO, u0: np.ndarray | None = None,
-        exclusion: Exclusion | None = None) -> RunResult:
+        exclusion: Exclusion | None = None, peak_every: int = 0) -> RunResult:
     """Advance ``n_steps`` steps of size ``dt`` [s], sampling stresses every ``sample_every``
     steps and calling ``frame`` every ``frame_every`` steps (a multiple of sample_every), at
     step 0 and at the end — and, before a regular frame, at the latest running von Mises peak
     if it rose since the previous frame (so the frames include the final peak's instant).
     ``exclusion``: owned nodes in the St-Venant zones of each contact sample's loads
     (:mod:`flexnet_fe.shell.hotspot`), left out of the peaks and the history's maxima (not of
-    the envelope); None: no zones."""
+    the envelope); None: no zones. ``peak_every``: evaluate the stresses for the running peaks
+    and the envelope every that many steps (a divisor of ``sample_every``; 0: at the samples
+    only); the history rows stay at ``sample_every``."""
     serial = model.V.mesh.comm.size == 1
     if backend is Backend.AUTO:
         backend = Backend.COMPILED if serial else Backend.PETSC
@@ -107,11 +109,13 @@ def run(model: ShellModel, loads: LoadHistory, R: RecoveryData, *, dt: float, n_
                          "under MPI")
     if frame_every % sample_every:
         raise ValueError("frame_every must be a multiple of sample_every")
+    if peak_every < 0 or (peak_every and sample_every % peak_every):
+        raise ValueError("peak_every must be 0 or a divisor of sample_every")
     go = _run_compiled if backend is Backend.COMPILED else _run_petsc
     return go(model, loads, R, dt=dt, n_steps=n_steps, sample_every=sample_every,
               frame_every=frame_every, alpha=alpha, beta=beta, growth_limit=growth_limit,
               frame=frame or (lambda t, u: None), u0=u0,
-              exclusion=exclusion or no_exclusion(len(loads.times)))
+              exclusion=exclusion or no_exclusion(len(loads.times)), peak_every=peak_every)
 
 
 class LocalFrame:
@@ -151,13 +155,13 @@ def step_data(model: ShellModel, loads: LoadHistory, frame: LocalFrame,
 
 
 def _run_compiled(model, loads, R, *, dt, n_steps, sample_every, frame_every, alpha, beta,
-                  growth_limit, frame, u0, exclusion) -> RunResult:
+                  growth_limit, frame, u0, exclusion, peak_every) -> RunResult:
     op = model.op
     lf = LocalFrame(model.fin.plane)
     D = step_data(model, loads, lf, exclusion)
     RL = R._replace(e1=np.array([1.0, 0.0, 0.0]), e2=np.array([0.0, 1.0, 0.0]))
     Pm = kn.StepParams(dt=dt, alpha=alpha, beta=beta, growth_limit=growth_limit,
-                       sample_every=sample_every)
+                       sample_every=sample_every, peak_every=peak_every)
     St = kn.new_state(op.n_owned, None if u0 is None
                       else lf.to_local(constrain(op, np.array(u0, float))))
     nn = op.n_owned // NDOF_NODE
@@ -246,7 +250,7 @@ def _masked_max(nodal: np.ndarray, exclusion: Exclusion, times: np.ndarray, t: f
 
 
 def _run_petsc(model, loads, R, *, dt, n_steps, sample_every, frame_every, alpha, beta,
-               growth_limit, frame, u0, exclusion) -> RunResult:
+               growth_limit, frame, u0, exclusion, peak_every) -> RunResult:
     from flexnet_fe.errors import NumericalError
 
     op = model.op
@@ -259,7 +263,7 @@ def _run_petsc(model, loads, R, *, dt, n_steps, sample_every, frame_every, alpha
     last_peak_step, done, failed = -1, 0, 0
     last_u = np.zeros(op.n_owned)
     gen = central_difference(op, loads, dt, n_steps, sample_every, dt_crit=dt, alpha=alpha,
-                             beta=beta, u0=u0, growth_limit=growth_limit)
+                             beta=beta, u0=u0, growth_limit=growth_limit, peak_every=peak_every)
     try:
         for smp in gen:
             vraw, _, _, umax = sampler(smp.u)
@@ -268,13 +272,15 @@ def _run_petsc(model, loads, R, *, dt, n_steps, sample_every, frame_every, alpha
             np.maximum(env[:, 0], sampler.nodal[:, :2].max(axis=1), out=env[:, 0])
             np.maximum(env[:, 1], sampler.nodal[:, 2:].max(axis=1), out=env[:, 1])
             gv, owner = comm.allreduce((vmax, comm.rank), op=MPI.MAXLOC)
-            loc = comm.bcast(op.x_nodes[node] if comm.rank == owner and node >= 0
-                             else None, root=owner)
             p1g = comm.allreduce(p1max, op=MPI.MAX)
-            for k, val in zip(rows, (smp.t, gv, loc if loc is not None else np.full(3, np.nan),
-                                     p1g, comm.allreduce(umax, op=MPI.MAX), smp.kinetic,
-                                     smp.strain, smp.work)):
-                rows[k].append(val)
+            if smp.row:  # a history row (else: an instant for the peaks and the envelope only)
+                loc = comm.bcast(op.x_nodes[node] if comm.rank == owner and node >= 0
+                                 else None, root=owner)
+                for k, val in zip(rows, (smp.t, gv,
+                                         loc if loc is not None else np.full(3, np.nan), p1g,
+                                         comm.allreduce(umax, op=MPI.MAX), smp.kinetic,
+                                         smp.strain, smp.work)):
+                    rows[k].append(val)
             if gv > peak["vm"]:
                 peak.update(vm=gv, t=smp.t, step=smp.step,
                             node=node if comm.rank == owner else -1)

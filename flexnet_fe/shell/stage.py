@@ -242,7 +242,8 @@ def _time_steps(model: ShellModel, shell: ShellConfig, end_time: float, log, nam
     lam, resid = max_eigenvalue(model.op, steps=shell.lanczos_steps)
     dt_crit = critical_step(lam, shell.rayleigh_alpha, shell.rayleigh_beta)
     dt = shell.safety_factor * dt_crit
-    every = max(1, round(shell.history_interval / dt))
+    peak_every = max(1, round(shell.peak_interval / dt))
+    every = peak_every * max(1, round(shell.history_interval / (dt * peak_every)))
     # whole sampling intervals, so that the last step is a sample in both backends (the PETSc
     # path also samples the last step; the compiled one samples multiples of ``every`` only)
     n_steps = every * max(1, math.ceil(end_time / (dt * every)))
@@ -253,10 +254,10 @@ def _time_steps(model: ShellModel, shell: ShellConfig, end_time: float, log, nam
     dofs = model.V.dofmap.index_map.size_global * NDOF_NODE
     log.info("shell %s: %d DOFs, rotary inertia ×%.3g, dt_crit = %.4e s (Lanczos, %d steps, "
              "residual %.1e), dt = %.4e s (×%.2f), element estimate h_min/c_p = %.4e s, "
-             "%d steps to %.4e s, stresses sampled every %d steps", name, dofs,
+             "%d steps to %.4e s, stresses every %d steps (history rows every %d)", name, dofs,
              model.rotary_scale, dt_crit, shell.lanczos_steps, resid, dt, shell.safety_factor,
-             model.h_min / c_p, n_steps, end_time, every)
-    return dt_crit, dt, n_steps, every, field_every, dofs
+             model.h_min / c_p, n_steps, end_time, peak_every, every)
+    return dt_crit, dt, n_steps, every, field_every, dofs, peak_every
 
 
 def _whole_fin(model: ShellModel, R, u_owned: np.ndarray, node: int):
@@ -308,7 +309,8 @@ def solve_fin(model: ShellModel, loads: LoadHistory, shell: ShellConfig, end_tim
     the fin's summary (peaks with their error estimate, dt, dt_crit, dofs, steps)."""
     comm = model.V.mesh.comm
     out_dir.mkdir(parents=True, exist_ok=True)
-    dt_crit, dt, n_steps, every, field_every, dofs = _time_steps(model, shell, end_time, log, name)
+    dt_crit, dt, n_steps, every, field_every, dofs, peak_every = _time_steps(model, shell,
+                                                                             end_time, log, name)
     R = recovery_for(model)
     writer = _FieldWriter(model, R, out_dir / FIELDS_XDMF)
     with progress_bar(n_steps, f"shell {name}") as bar:
@@ -325,11 +327,12 @@ def solve_fin(model: ShellModel, loads: LoadHistory, shell: ShellConfig, end_tim
                   frame_every=field_every, alpha=shell.rayleigh_alpha, beta=shell.rayleigh_beta,
                   growth_limit=shell.energy_growth_limit, frame=frame,
                   backend=Backend(shell.backend),
-                  exclusion=zones.exclusion if zones is not None else None)
+                  exclusion=zones.exclusion if zones is not None else None,
+                  peak_every=peak_every)
     pk = None if res.failed_at else _peak(model, R, res, zones)
     vm, loc = res.vm.copy(), res.loc.copy()
-    if pk is not None:  # the peak row carries the located peak (≥ its nodal value)
-        i = int(np.argmax(res.vm))
+    if pk is not None:  # the row nearest the peak's instant carries the located peak
+        i = int(np.argmin(np.abs(res.t - res.peak_t)))
         vm[i], loc[i] = max(pk.value, vm[i]), pk.location
     cols = {"t_s": res.t, "max_von_mises_pa": vm, "max_von_mises_x_m": loc[:, 0],
             "max_von_mises_y_m": loc[:, 1], "max_von_mises_z_m": loc[:, 2],
@@ -360,7 +363,7 @@ def solve_fin(model: ShellModel, loads: LoadHistory, shell: ShellConfig, end_tim
            "max_abs_u_m": float(res.umax.max(initial=0.0)),
            "dt_s": dt, "dt_crit_s": dt_crit, "dt_element_estimate_s": model.h_min / c_p,
            "rotary_inertia_scale": model.rotary_scale, "dofs": dofs, "steps": n_steps,
-           "sample_interval_s": every * dt}
+           "sample_interval_s": every * dt, "peak_interval_s": peak_every * dt}
     return out
 
 
