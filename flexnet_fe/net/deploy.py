@@ -40,14 +40,47 @@ def net_area(model: NetModel, x: np.ndarray, pixel: float) -> float:
     return float(raster_area(np.ascontiguousarray(x[:, :2]), model.cells, pixel))
 
 
-def area_peaks(area: np.ndarray) -> np.ndarray:
-    """Indices of the maxima of the area history whose prominence exceeds 5 % of its range."""
-    from scipy.signal import find_peaks
+def _local_maxima(x: np.ndarray) -> list[int]:
+    """Interior local maxima of x as ``scipy.signal.find_peaks`` finds them: a strict rise,
+    then a flat top (possibly one sample), then a strict fall; the index is the middle of the
+    top (rounded down)."""
+    peaks, i, n = [], 1, len(x)
+    while i < n - 1:
+        if x[i - 1] < x[i]:
+            ahead = i + 1
+            while ahead < n - 1 and x[ahead] == x[i]:
+                ahead += 1
+            if x[ahead] < x[i]:
+                peaks.append((i + ahead - 1) // 2)
+                i = ahead
+        i += 1
+    return peaks
 
+
+def _prominence(x: np.ndarray, p: int) -> float:
+    """Topographic prominence of the peak at p (``scipy.signal.peak_prominences``, no window):
+    x[p] minus the higher of the lowest values on each side before a higher sample."""
+    left = right = x[p]
+    i = p
+    while i >= 0 and x[i] <= x[p]:
+        left = min(left, x[i])
+        i -= 1
+    i = p
+    while i < len(x) and x[i] <= x[p]:
+        right = min(right, x[i])
+        i += 1
+    return float(x[p] - max(left, right))
+
+
+def area_peaks(area: np.ndarray) -> np.ndarray:
+    """Indices of the maxima of the area history whose prominence is at least 5 % of its range
+    (``scipy.signal.find_peaks(area, prominence=0.05 * range)``, written out: importing
+    scipy.signal costs 0.5–1.7 s, several times the deploy kernel; tests/net checks the two agree)."""
     rng = float(area.max() - area.min())
     if rng <= 0.0:
         return np.zeros(0, dtype=int)
-    return find_peaks(area, prominence=0.05 * rng)[0]
+    x = np.asarray(area, dtype=float)
+    return np.array([p for p in _local_maxima(x) if _prominence(x, p) >= 0.05 * rng], dtype=np.int64)
 
 
 def find_period(t: np.ndarray, area: np.ndarray) -> float | None:

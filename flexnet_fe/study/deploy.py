@@ -19,11 +19,11 @@ def points(quick: bool) -> list[Point]:
     """One-at-a-time variants around the default; the reference sets every knob to its finest."""
     grid = {"net.subdivisions": [2, 3],
             "deploy.safety_factor": [1.0, 0.25],
-            "deploy.area_pixel": [0.04, 0.02, 0.005]}
+            "deploy.area_pixel": [0.04, 0.03, 0.02, 0.005]}
     if quick:
         grid = {"net.subdivisions": [2], "deploy.safety_factor": [1.0], "deploy.area_pixel": [0.02]}
     ref = {"net.subdivisions": 4, "deploy.safety_factor": 0.125,
-           "deploy.area_pixel": 0.0025 if quick else 0.005}
+           "deploy.area_pixel": 0.0025}
     out = [Point("reference", "all finest", tuple(f"{k}={v}" for k, v in ref.items()), is_reference=True),
            Point("default", "as shipped", (), is_default=True)]
     for knob, values in grid.items():

@@ -91,12 +91,19 @@ def _simplify(rec: dict) -> list[str]:
 def _throughput(rec: dict) -> list[str]:
     out = ["## Throughput and scaling", "", _machine(rec), ""] + [f"- {n}" for n in rec["notes"]] + [""]
     for kind, title in (("net_kernel", "Net kernel against plain numpy (one core)"),
-                        ("shell_dof_step", "Shell: CPU ns per DOF-step"),
+                        ("stream_triad", "STREAM triad (numba, one core, thread CPU time)"),
+                        ("shell_bandwidth", "Shell step: bytes moved per step (counted from the kernel's "
+                                            "arrays) over its time → effective bandwidth and fraction of the triad"),
+                        ("shell_dof_step", "Shell: CPU ns per DOF-step in the accuracy study's runs"),
                         ("scaling", "Cost against problem size (log-log slope)"),
-                        ("end_to_end", "Default case end to end, by stage (status.json wall_s)")):
+                        ("end_to_end", "Default case end to end, by stage: wall [s] and its split "
+                                       "(cProfile: s_kernel = the compiled time loop; s_* outside it)"),
+                        ("mpi", "Shell stage of the default case: 1 against 2 MPI ranks")):
         rs = [r for r in rec["rows"] if r["kind"] == kind]
         if rs:
-            cols = [k for k in rs[0] if k != "kind"]
+            cols: list[str] = []
+            for r in rs:
+                cols += [k for k in r if k != "kind" and k not in cols]
             out += [f"### {title}", ""] + _table(rs, cols) + [""]
     return out
 

@@ -2,8 +2,9 @@
 quick-study default lies within its stated tolerance of the quick reference of the same run.
 
 The wall time is measured and printed (pytest -s), not asserted: timings on the shared machine
-vary 2–4× with the load (brief: no absolute timing in a test). Measured: 49 s CPU; 2.2–3.9 min
-wall at load average 6–10 on 2 cores.
+vary 2–4× with the load (brief: no absolute timing in a test). Measured 2026-11-23 (issue 15,
+after the merge): 55 s CPU, 151 s wall at load average ≈ 5–6 on 2 cores (collide 22 s CPU,
+stability 11 s, flight 6 s, shell 4 s, deploy 2 s, throughput 1 s).
 """
 
 from __future__ import annotations
@@ -18,7 +19,10 @@ from flexnet_fe.cli import main
 
 TOLERANCE = {
     # The issue's bar (2 % of converged) for the stages whose reference differs from the default
-    # only in resolution knobs (dt, crop, area pixel, rope subdivision) on the reduced scenes.
+    # only in resolution knobs (dt, crop, area pixel) on the reduced scenes. The quick collision
+    # does not split its ropes (rope_split 1, not varied): on its 20 cm flat net the split is far
+    # from converged (Δv/v 1.36e-4 / 6.8e-5 / 4.8e-5 at k = 2 / 4 / 8), so the rope resolution is
+    # measured by the full study only (reference = 2 × the shipped case's rope_split).
     "deploy": 0.02,
     "collide": 0.02,
     "flight": 0.02,
