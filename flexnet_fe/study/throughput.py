@@ -1,6 +1,10 @@
-"""Throughput and scaling (issue 15 §4): net kernel against plain numpy (helper E's
-``flexnet_fe.study.net_numpy``, when present), shell ns per DOF-step, log-log slope of cost
-against size per stage, and the default case's end-to-end time by stage from a run directory."""
+"""Throughput and scaling (issue 15 §4): the net kernel against the plain-numpy second model
+(``study.net_numpy``); the shell step's effective bandwidth (bytes counted from the kernel's
+arrays) beside a STREAM triad; shell ns per DOF-step and the log-log slope of cost against size
+per stage (from the accuracy records); the default case end to end, by stage and by part
+(kernel, plots, area, snapshots, XDMF, meshing, assembly, load transfer, report); 1 against 2
+MPI ranks of its shell stage. Measurements: thread CPU time for one-core kernels, wall time for
+stages (the pipeline's own unit), one run, side by side."""
 
 from __future__ import annotations
 
@@ -363,6 +367,6 @@ def rows(ctx: Context, stage_rows: list[dict], run_dir: Path | None = None) -> l
     rd = ctx.scratch("end_to_end")
     ctx.note("throughput", "end to end: cases/radar_traction run stage by stage in one process with the parts' "
                            "entry functions timed (throughput.ENTRIES; numba's on-disk caches filled, imports and "
-                           "cache loading counted in the first stage that needs them), then its HTML report")
+                           "cache loading counted in the first stage that needs them), then `flexnet report` on it")
     out += profile_case(CASE, rd)
     return out + mpi_scaling(ctx, rd)
