@@ -94,10 +94,13 @@ def _throughput(rec: dict) -> list[str]:
                         ("stream_triad", "STREAM triad (numba, one core, thread CPU time)"),
                         ("shell_bandwidth", "Shell step: bytes moved per step (counted from the kernel's "
                                             "arrays) over its time → effective bandwidth and fraction of the triad"),
-                        ("shell_dof_step", "Shell: CPU ns per DOF-step in the accuracy study's runs"),
-                        ("scaling", "Cost against problem size (log-log slope)"),
-                        ("end_to_end", "Default case end to end, by stage: wall [s] and its split "
-                                       "(cProfile: s_kernel = the compiled time loop; s_* outside it)"),
+                        ("shell_dof_step", "Shell: CPU ns per DOF-step in the shell study's runs "
+                                           "(computed from the shell record on this page: its code and date)"),
+                        ("scaling", "Cost against problem size (log-log slope; from the accuracy records on "
+                                    "this page: their code and dates)"),
+                        ("end_to_end", "Default case end to end, by stage: wall [s] and its split (parts timed "
+                                       "at their entry functions: s_kernel = the compiled time loop; s_* the "
+                                       "parts outside it; s_other = the rest)"),
                         ("mpi", "Shell stage of the default case: 1 against 2 MPI ranks")):
         rs = [r for r in rec["rows"] if r["kind"] == kind]
         if rs:

@@ -53,8 +53,9 @@ def rows(stage_rows: list[dict], notes: list[str]) -> list[dict]:
                     "without_value": u, "difference_rel": ratio, "cost_with_s": math.nan,
                     "cost_without_s": math.nan, "matters": bool(ratio > HEADLINE_TOLERANCE)})
     if not any(r["simplification"].startswith("lumped ropes near") for r in out):
-        notes.append("lumped vs split ropes near contact: collide.rope_split is not in this branch's "
-                     "schema — not measured")
+        notes.append("lumped vs split ropes near contact: the collide record on this page has no "
+                     "collide.rope_split rows (measured before the knob existed) — re-run `flexnet study "
+                     "collide` to measure it")
     notes.append("air off vs on during the collision: the [collide] table has no air knob — not measured")
     notes.append("rigid missile in the collision: no elastic-missile model exists — not measured; the "
                  "one-way check compares the shell stage's largest fin displacement with the rope "

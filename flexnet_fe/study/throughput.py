@@ -1,13 +1,20 @@
-"""Throughput and scaling (issue 15 §4): net kernel against plain numpy (helper E's
-``flexnet_fe.study.net_numpy``, when present), shell ns per DOF-step, log-log slope of cost
-against size per stage, and the default case's end-to-end time by stage from a run directory."""
+"""Throughput and scaling (issue 15 §4): the net kernel against the plain-numpy second model
+(``study.net_numpy``); the shell step's effective bandwidth (bytes counted from the kernel's
+arrays) beside a STREAM triad; shell ns per DOF-step and the log-log slope of cost against size
+per stage (from the accuracy records); the default case end to end, by stage and by part
+(kernel, plots, area, snapshots, XDMF, meshing, assembly, load transfer, report); 1 against 2
+MPI ranks of its shell stage. Measurements: thread CPU time for one-core kernels, wall time for
+stages (the pipeline's own unit), one run, side by side."""
 
 from __future__ import annotations
 
 import importlib
 import logging
 import math
+import os
 import shutil
+import subprocess
+import sys
 import time
 from pathlib import Path
 
@@ -265,16 +272,20 @@ class _Timers:
 
 def profile_case(case_dir: Path, run_dir: Path, log=LOG) -> list[dict]:
     """Run ``case_dir`` stage by stage into ``run_dir`` with its functions timed by part
-    (:data:`ENTRIES`), then its HTML report; per stage the wall time, the seconds of each part
+    (:data:`ENTRIES`), then ``flexnet report`` on it; per stage the wall time, the seconds of each part
     (``s_<part>``), the remainder (``s_other``) and the kernel's share of the stage."""
     from flexnet_fe.config import load_case
     from flexnet_fe.pipeline import run_case
-    from flexnet_fe.report.build import build_report
 
     case, case_dir = load_case(case_dir, [])
     out = []
     jobs = [(s.value, lambda s=s: run_case(case, case_dir, run_dir, [s], force=True)) for s in case.case.stages]
-    jobs.append(("report", lambda: build_report(run_dir)))
+    # the report as users make it, `flexnet report RUN` (a process of its own: the run layer does
+    # not import the report package); its row is the whole command, interpreter start included
+    root = Path(__file__).resolve().parents[2]
+    jobs.append(("report (flexnet report, own process)", lambda: subprocess.run(
+        [sys.executable, "-m", "flexnet_fe.cli", "report", str(run_dir)], check=True, cwd=root,
+        capture_output=True, env=dict(os.environ, PYTHONPATH=str(root)))))
     for name, job in jobs:
         with _Timers() as tm:
             t0 = time.perf_counter()
@@ -298,10 +309,6 @@ def _shell_run(src: Path, dst: Path, sets: tuple[str, ...], ranks: int, timeout:
     collide stage done), with ``ranks`` MPI processes (``mpirun -n`` when > 1, as
     tests/run/test_mpi_run.py does); the stage's wall time from status.json and the process's
     elapsed time [s]."""
-    import os
-    import subprocess
-    import sys
-
     from flexnet_fe.io import read_json
     from flexnet_fe.runs import STATUS
     from flexnet_fe.study.scenes import CASE
@@ -358,7 +365,8 @@ def rows(ctx: Context, stage_rows: list[dict], run_dir: Path | None = None) -> l
         ctx.note("throughput", "end to end by stage and 1 vs 2 MPI ranks: full study only (or --run-dir DIR)")
         return out
     rd = ctx.scratch("end_to_end")
-    ctx.note("throughput", "end to end: cases/radar_traction run stage by stage under cProfile (numba's on-disk "
-                           "caches filled, imports and cache loading counted), then its HTML report")
+    ctx.note("throughput", "end to end: cases/radar_traction run stage by stage in one process with the parts' "
+                           "entry functions timed (throughput.ENTRIES; numba's on-disk caches filled, imports and "
+                           "cache loading counted in the first stage that needs them), then `flexnet report` on it")
     out += profile_case(CASE, rd)
     return out + mpi_scaling(ctx, rd)
