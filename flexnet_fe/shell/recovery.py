@@ -16,8 +16,10 @@ deflection's order), at boundary nodes O(h). The surface stresses follow pointwi
 von Mises σ_vm = √(σ11² + σ22² − σ11σ22 + 3σ12²), max principal σ_1 = (σ11+σ22)/2 +
 √(((σ11−σ22)/2)² + σ12²). Transverse shear stress is not included (zero at the surfaces).
 
-Peak: the largest nodal von Mises over samples (outside the St-Venant zones of the active
-contact loads, :mod:`flexnet_fe.shell.hotspot`); at the peak's instant the recovered field
+Peak: the largest nodal von Mises over the instants the kernel evaluates it (every
+``shell.peak_interval``, 0.25 µs by default: a rope-load stress peak is 3–5 µs wide), outside
+the St-Venant zones of the active contact loads (:mod:`flexnet_fe.shell.hotspot`); at the peak's
+instant the recovered field
 σ* = Σ N_i σ*_i is searched inside the cells around that node (:func:`locate_peak`), so the
 reported location lies within the element where the peak occurs. Error estimate: the
 Zienkiewicz–Zhu estimator at the peak, max over the Gauss points of those cells of

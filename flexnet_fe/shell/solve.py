@@ -169,7 +169,7 @@ def _run_compiled(model, loads, R, *, dt, n_steps, sample_every, frame_every, al
     # the sample at step 0 (the kernel samples at multiples of sample_every ≥ 1)
     _sample0(D, RL, St, H, Pm)
     frame(0.0, lf.to_body(St.u))
-    done, failed, last_peak_step = 0, 0, -1
+    done, failed, last_peak_step = 0, 0, 0  # step 0 is the t = 0 frame already written
     while done < n_steps and not failed:
         n = min(frame_every - done % frame_every, n_steps - done)
         failed = kn.advance(D, Pm, RL, St, H, n)

@@ -23,7 +23,7 @@ from conftest import CLI, ROOT, env, run_cli, status
 
 RADAR = ROOT / "cases/radar_traction"
 SMALL = ["missile.mesh_size=0.05", "shell.end_time=3e-4", "shell.history_interval=1e-5",
-         'collide.net_source="flat_taut"']
+         'collide.net_source="flat_taut"', "shell.local_mesh_size=0.0025"]
 
 
 def fake_collide(ctx):

@@ -125,3 +125,16 @@ def test_peak_tracked_between_history_rows_equals_every_step_sampling(backend):
     assert len(tracked.t) == len(rows.t) == n // 20 + 1
     np.testing.assert_array_equal(tracked.vm, rows.vm)  # rows unchanged by the tracking
     assert rows.peak_vm < 0.99 * every.peak_vm
+
+
+def test_frames_have_distinct_times_when_the_peak_stays_at_step_0():
+    """No load: the running peak stays at the t = 0 sample; the compiled path must not write
+    that instant as a second 'peak' frame (an XDMF file refuses two frames at one time)."""
+    m = api.plate(4, 3, 0.3, 0.15, MAT, supports={"root": Support.CLAMPED})
+    lam, _ = max_eigenvalue(m.op)
+    dt = 0.9 * critical_step(lam, 0.0, 0.0)
+    loads = api.pressure(m, np.array([0.0, 1.0]), np.zeros(2))
+    times = []
+    run(m, loads, recovery_for(m), dt=dt, n_steps=40, sample_every=4, frame_every=8,
+        frame=lambda t, u: times.append(t), backend=Backend.COMPILED)
+    assert len(times) == len(set(times)) == 6  # t = 0 and every 8 steps
