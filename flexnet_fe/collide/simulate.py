@@ -36,7 +36,7 @@ from flexnet_fe.collide.metrics import FinContacts, MissileHistory, collision_me
 from flexnet_fe.collide.scene import HeldNet, MissileStart, fin_planes, place_missile
 from flexnet_fe.collide.timestep import StepChoice, choose_step, contact_stiffness
 from flexnet_fe.contact.law import DAMPING_CODE, DampingModel, hysteresis_factor
-from flexnet_fe.contact.restitution import restitution_achieved, restitution_warning
+from flexnet_fe.contact.restitution import restitution_check
 from flexnet_fe.errors import NumericalError
 from flexnet_fe.missile.geometry import Missile
 from flexnet_fe.missile.shapes import pack_shapes, part_names
@@ -466,9 +466,8 @@ def _summary(rec: _Recorder, setup: Setup, loads: FinLoads, x_start, dt, steps, 
                        contact_force_n=c["contact_force_mean_n"], gravity_mps2=km.gravity, mass_kg=missile.mass),
         FinContacts(list(loads.fin_names), loads.fin, loads.force, cfg.output_interval), cfc=cfg.cfc_class)
     warnings += metrics.pop("warnings")
-    code = DAMPING_CODE[cfg.damping_model]
-    e_ach = restitution_achieved(code, cfg.restitution, 10.0, 1.0, exponent=cfg.contact_exponent) if code else 1.0
-    bad_e = restitution_warning(DampingModel(cfg.damping_model).value, cfg.restitution, e_ach)
+    e_ach, bad_e = restitution_check(DampingModel(cfg.damping_model).value, cfg.restitution, cfg.impact_speed,
+                                     cfg.damping_min_approach_speed, cfg.contact_exponent)
     warnings += [bad_e] if bad_e else []
     summary = {
         # headline numbers: CFC-filtered peak (collide.metrics) and window-free Δv, impulses, duration

@@ -45,3 +45,15 @@ def test_collision_warns_when_the_damping_law_misses_the_requested_restitution()
         assert line is not None and model.value in line and "flores" in line
     e = restitution_achieved(DAMPING_CODE[DampingModel.flores], 0.5, 10.0)
     assert abs(e - 0.5) <= 0.05 and restitution_warning("flores", 0.5, e) is None
+
+
+def test_guard_flags_an_impact_below_the_approach_speed_floor():
+    # Reference: restitution_achieved's RK4 integration of the two-body impact (tests above). Below
+    # the floor v_floor χ is capped at c/v_floor, so every law's e rises above the requested one;
+    # the guard made at the impact speed must say so (the stability map found these unflagged).
+    from flexnet_fe.contact.restitution import RESTITUTION_TOLERANCE, restitution_check
+    for model in (DampingModel.hunt_crossley, DampingModel.lankarani_nikravesh, DampingModel.flores):
+        e, line = restitution_check(model.value, 0.5, 0.1, 1.0)
+        assert e - 0.5 > RESTITUTION_TOLERANCE and line is not None and "below" in line
+    e, line = restitution_check("flores", 0.5, 500.0, 1.0)  # above the floor Flores meets the request
+    assert abs(e - 0.5) <= RESTITUTION_TOLERANCE and line is None
