@@ -116,7 +116,8 @@ def write_default_outputs(ctx: Context):
     """fin_contacts.npz + history.csv of the default impact (the shell study's loads); the folder."""
     from flexnet_fe.collide.stage import write_outputs
 
-    net, missile, res = ctx.cache["collide_default"]
+    _, missile, res = ctx.cache["collide_default"]
+    net = res.net  # the net the collision ran: ropes near the path split (collide.rope_split)
     d = ctx.scratch("collide_default")
     write_outputs(res, net.model.springs[res.alive], net.rest_length[res.alive],
                   net.model.stiffness[res.alive], missile, d)
