@@ -247,12 +247,13 @@ def _flight_items(run: RunData) -> list[Item]:
     dmg = f.get("damage_from_shell")
     wing = _num(f.get("wing_damage"))
     if isinstance(dmg, dict):
-        frac = dmg.get("overstressed_area_fraction") or {}
+        # flight.damage.damage_from_shell: the area fraction each fin loses by the damage law
+        frac = dmg.get("lost_area_fraction") or {}
         parts = ", ".join(f"{k} {100 * v:.3g} %" for k, v in frac.items() if _num(v))
-        allow = _num(dmg.get("allowable_stress_pa"))
-        note = (f"fin area above {allow * 1e-6:.4g} MPa: {parts or 'none'}" if allow is not None else parts)
-        items.append(Item("damage used by the flight (from the shell stage)",
-                          f"wing damage {100 * wing:.3g} %" if wing is not None else "—", note))
+        law, eps = dmg.get("law"), _num(dmg.get("failure_strain"))
+        note = f"damage law {law}" + (f", failure strain {eps:g}" if eps is not None else "") + \
+            (f", allowable from the {dmg['allowable_from']}" if dmg.get("allowable_from") else "")
+        items.append(Item("fin area lost, used by the flight (from the shell stage)", parts or "none", note))
     elif wing is not None:
         items.append(Item("damage used by the flight", f"wing damage {100 * wing:.3g} %", "from the case file"))
     return items

@@ -134,3 +134,25 @@ def test_new_contract_keys_in_the_verdict(tmp_path):
     assert "peak at a re-entrant corner (wing_1)" in html            # nested warning in the box
     energy = {r[0]: r for r in tree.tables["energy-table"][1:]}
     assert energy["collide"][1] == "energy_balance_j"                 # the stage's own balance
+
+
+def test_flight_damage_from_the_shell_shows_every_fin_that_lost_area(tmp_path):
+    """The flight's link to the shell stage (flight.damage.damage_from_shell: lost_area_fraction
+    per fin) is shown fin by fin — a rudder's loss is not hidden behind a 'wing damage 0 %'."""
+    from flexnet_fe.io import atomic_write_json
+    from flexnet_fe.report import build_report
+
+    from .synthetic import parse_html
+
+    run = tmp_path / "run"
+    atomic_write_json(run / "resolved.json", {"case": {"case": {"name": "n", "stages": ["flight"]}}})
+    atomic_write_json(run / "status.json", {"case": "n", "stages": {"flight": {"state": "done"}}})
+    atomic_write_json(run / "summary.json", {"flight": {
+        "hit": True, "miss_distance_m": 0.32, "lethal_radius_m": 5.0, "wing_damage": 0.0,
+        "damage_from_shell": {"law": "failure_strain", "failure_strain": 0.11, "allowable_from": "shell summary",
+                              "lost_area_fraction": {"wing_1": 0.0, "rudder_2": 0.00428, "rudder_3": 0.00461}}}})
+    tree = parse_html(build_report(run, pictures=False).read_text())
+    flight = {r[0]: r[1:] for r in tree.tables["verdict-flight"][1:]}
+    row = flight["fin area lost, used by the flight (from the shell stage)"]
+    assert row[0] == "rudder_2 0.428 %, rudder_3 0.461 %"
+    assert "failure strain 0.11" in row[1]
