@@ -224,9 +224,24 @@ def _missile_items(run: RunData) -> list[Item]:
         if _num(c.get(key)) is not None:
             items.append(Item(label, with_unit(c[key], unit_of(key)), f"collide summary {key}"))
     if isinstance(c.get("passed_through"), bool):
-        items.append(Item("net", "passed through" if c["passed_through"] else "captured / carried forward",
-                          "collide summary passed_through"))
+        items.append(_outcome_item(c))
     return items
+
+
+def _outcome_item(c: dict) -> Item:
+    """Pass-through or capture, from the collide summary; a run stopped by its time cap while the
+    rope still pressed on the missile has no outcome yet (``stop_reason``, ``force_at_end_n``): it
+    is shown as such and flagged, not called a capture."""
+    if c["passed_through"]:
+        return Item("net", "passed through", "collide summary passed_through")
+    force = _num(c.get("force_at_end_n"))
+    if c.get("stop_reason") in ("duration", "max_duration") and force is not None and force > 0:
+        t_end = _num(c.get("end_time_s"))
+        when = f" at {t_end * 1e3:.4g} ms" if t_end is not None else ""
+        return Item("net", f"still on the missile when the run stopped{when}: outcome not determined",
+                    f"collide summary stop_reason {c['stop_reason']}, force at the end {force:.4g} N "
+                    "(raise collide.max_duration)", True)
+    return Item("net", "captured / carried forward", "collide summary passed_through")
 
 
 def _flight_items(run: RunData) -> list[Item]:

@@ -136,6 +136,20 @@ def test_new_contract_keys_in_the_verdict(tmp_path):
     assert energy["collide"][1] == "energy_balance_j"                 # the stage's own balance
 
 
+def test_a_run_stopped_by_its_time_cap_in_contact_has_no_outcome():
+    """A collide run that stopped at its duration with the rope still pressing on the missile
+    (stop_reason "duration", force_at_end_n > 0) is neither a pass-through nor a capture: the
+    verdict says so and flags it (radar_traction at 12 ms: the net is still on the rudders)."""
+    from flexnet_fe.report.verdict import _outcome_item
+
+    base = {"passed_through": False, "stop_reason": "duration", "end_time_s": 0.012, "force_at_end_n": 6091.4}
+    item = _outcome_item(base)
+    assert item.bad and "outcome not determined" in item.value and "12 ms" in item.value
+    assert _outcome_item({**base, "stop_reason": "interaction_over", "force_at_end_n": 0.0}).value == \
+        "captured / carried forward"
+    assert not _outcome_item({**base, "passed_through": True}).bad
+
+
 def test_flight_damage_from_the_shell_shows_every_fin_that_lost_area(tmp_path):
     """The flight's link to the shell stage (flight.damage.damage_from_shell: lost_area_fraction
     per fin) is shown fin by fin — a rudder's loss is not hidden behind a 'wing damage 0 %'."""
