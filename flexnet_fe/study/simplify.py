@@ -2,8 +2,9 @@
 simplification the code can switch, their difference and cost, flagged above 2 %.
 
 Built from the accuracy rows of the stage studies on the page, the one-way (rigid-fin) check
-from the shell study's largest fin displacement, and one measurement of its own: air off vs on
-during the collision (:func:`air_rows`, the collide study's scene run side by side)."""
+from the shell study's largest fin displacement, and measurements of its own: air off vs on
+during the collision (:func:`air_rows`, the collide study's scene run side by side) and, in the
+full study, the bound on the one-way fin loading (``study.one_way``)."""
 
 from __future__ import annotations
 
@@ -117,7 +118,10 @@ def rows(stage_rows: list[dict], notes: list[str], ctx: Context | None = None) -
                      "collide.rope_split rows (measured before the knob existed) — re-run `flexnet study "
                      "collide` to measure it")
     if ctx is not None:
+        from flexnet_fe.study import one_way
+
         out += air_rows(ctx, notes)
+        out += one_way.rows(ctx, notes)
     else:
         notes.append("air off vs on during the collision: not measured in this call (no study context)")
     notes.append("rigid missile in the collision: no elastic-missile model exists — not measured; the "
