@@ -35,6 +35,8 @@ def segment_air(model, state, f, e, u, length, dt):
     ``model.air_density`` is 0 (air off)."""
     if model.air_density == 0.0:
         return
+    if e >= model.diameter.shape[0]:  # a hand-built model with air but no diameters (no bounds check in numba)
+        raise ValueError("collide.air: CollideModel.diameter needs one entry per segment")
     v = state.v
     i, j = model.seg[e, 0], model.seg[e, 1]
     vm0, vm1, vm2 = 0.5 * (v[i, 0] + v[j, 0]), 0.5 * (v[i, 1] + v[j, 1]), 0.5 * (v[i, 2] + v[j, 2])

@@ -127,3 +127,11 @@ def test_air_off_is_bit_identical_to_no_knob(radar, log, scenes):
 def test_air_without_a_density_is_refused(radar, log, scenes):
     with pytest.raises(FlexnetError, match="collide.air = true needs the air density"):
         simulate(scenes.flat_net(0.2, 0.1), radar, _impact_cfg(air=True), 9.81, log)
+
+
+def test_air_model_without_diameters_is_refused(radar, scenes):
+    # a hand-built kernel model with air but no per-segment diameter must not read past its array
+    a = np.array([-1.0, 3.0, 0.0])
+    km, st = scenes.segment_scene(radar, a, a + [0.0, 0.0, 0.1], [0.0, 500.0, 0.0], [0.0, 500.0, 0.0])
+    with pytest.raises(ValueError, match="diameter"):
+        K.advance(km._replace(air_density=RHO), st, 1, 1e-6)
