@@ -55,7 +55,7 @@ def _row(label, s, ref=None) -> str:
 
 def _run(net, missile, cfg, air, log, **kw):
     try:
-        return simulate(net, missile, cfg, air.gravity, log, **kw).summary
+        return simulate(net, missile, cfg, air.gravity, log, air_density=air.density, **kw).summary
     except NumericalError as err:
         log.warning("%s", err)
         return None

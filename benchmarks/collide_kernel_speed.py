@@ -34,7 +34,7 @@ def main() -> None:
     net = held_net(case.net, case.collide.net_source, dep)
     missile = build_missile(case.missile)
     for rep in range(reps):
-        s = simulate(net, missile, case.collide, air.gravity, log, n_snapshots=2).summary
+        s = simulate(net, missile, case.collide, air.gravity, log, air_density=air.density, n_snapshots=2).summary
         ns = s["wall_s"] / (s["steps"] * s["active_segments"]) * 1e9
         load = Path("/proc/loadavg").read_text().split()[0]
         print(f"{label} rep {rep}: steps {s['steps']} active {s['active_segments']} wall {s['wall_s']:.2f} s "

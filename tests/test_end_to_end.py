@@ -61,7 +61,8 @@ def wing_damage_from_files(run_dir: Path) -> float:
 
 def collide_closure_from_files(run_dir: Path) -> tuple[float, float, float]:
     """Newton's third law and the energy balance of the collision, recomputed from
-    ``collide/history.csv`` alone: (|Δ(p_missile + p_net + impulse into held nodes)|max / the
+    ``collide/history.csv`` alone: (|Δ(p_missile + p_net + impulse into held nodes − air
+    impulse)|max / the
     missile's impulse [–], max |recomputed balance − the file's energy_balance_j| / the largest
     energy term [–], max |recomputed balance| / energy exchanged [–]). The balance is the sum of
     every ``*_j`` term (kinetic, stored, dissipated, external work) minus its initial value
@@ -70,6 +71,7 @@ def collide_closure_from_files(run_dir: Path) -> tuple[float, float, float]:
     s = json.loads((run_dir / "summary.json").read_text())["collide"]
     p = sum(np.column_stack([h[f"{who}_{a}_ns"] for a in "xyz"])
             for who in ("missile_momentum", "net_momentum", "held_impulse"))
+    p -= np.column_stack([h[f"air_impulse_{a}_ns"] for a in "xyz"])  # external: the air on the net (collide.air)
     momentum = float(np.max(np.linalg.norm(p - p[0], axis=1))) / s["impulse_ns"]
     terms = [h[k] for k in h if k.endswith("_j") and k != "energy_balance_j"]
     total = np.sum(terms, axis=0)

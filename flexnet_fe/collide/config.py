@@ -60,6 +60,10 @@ class CollideConfig(Section):
         "distance [m] by which the missile's tail must be past the free net nodes, with no contact in the last "
         "output interval, for the interaction to count as over"))
     gravity: bool = Field(False, description="apply gravity -g ŷ (ISA g at the altitude) to net and missile")
+    air: bool = Field(False, description=(
+        "apply the rope's aerodynamic law Eq. (5)-(8) (as in deploy) to every active rope segment, in air at "
+        "rest in the held net's frame, of the ISA density at the atmosphere table's altitude; its work and impulse "
+        "are booked (dissipated_air_j, air_impulse_*_ns). false = the paper's assumption 2, no air during the impact"))
 
     contact_exponent: float = Field(1.5, ge=1.0, le=2.0, description="exponent m of Eq. (28) [-] (Hertz: 1.5)")
     restitution: float = Field(0.5, gt=0.0, le=1.0,

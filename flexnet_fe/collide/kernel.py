@@ -44,6 +44,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
+from flexnet_fe.collide.air import segment_air
 from flexnet_fe.collide.fpu import FTZ_DAZ, get_mxcsr, set_mxcsr
 from flexnet_fe.collide.model import (A_BROKEN, A_CROSS, A_DISS_CONTACT, A_DISS_FRICTION, A_DISS_ROPE, A_FCONTACT,
                                       A_IMP_B, A_NBROKEN, A_NCONTACT, A_PEN, A_PEN_INT, A_PEN_RATIO, A_PHELD,
@@ -323,7 +324,8 @@ def _book_penetration(state, delta, ratio):
 
 @njit(cache=True)
 def _rope_forces(model, state, wk, dt):
-    """Rope tensions into wk.f (Eq. (1)–(4)); breaks segments past their breaking stretch."""
+    """Rope tensions into wk.f (Eq. (1)–(4)) and, with ``collide.air``, the rope's air force
+    (Eq. (5)–(8), ``collide.air``); breaks segments past their breaking stretch."""
     x, v, seg, f = state.x, state.v, model.seg, wk.f
     for e in range(seg.shape[0]):
         if not state.alive[e]:
@@ -348,6 +350,7 @@ def _rope_forces(model, state, wk, dt):
         # the dashpot's share T − K s: also when T is cut to 0 (a stretched rope contracting so
         # fast that K s + c l̇ < 0 cannot push), the dashpot then takes the spring's −K s l̇ > 0
         state.acc[A_DISS_ROPE] += (t - model.k[e] * max(stretch, 0.0)) * ldot * dt
+        segment_air(model, state, f, e, (u0, u1, u2), lf, dt)  # collide.air (no-op when off)
 
 
 @njit(cache=True)

@@ -30,7 +30,9 @@ A_TUN_PART = 18  # part id of the first tunnelling
 A_TUN_SPEED = 19  # approach speed of the first tunnelling [m/s]
 A_TUN_STEP = 20  # step index (within the call) of the first tunnelling
 A_PEN_INT = 21  # largest penetration within the call [m]
-N_ACC = 22
+A_DISS_AIR = 22  # work done against the air (collide.air), whole run [J]
+A_IMP_AIR = 23  # impulse of the air on the net, whole run, W [N s] (23, 24, 25)
+N_ACC = 26
 
 # -- status codes of ``kernel.advance`` ---------------------------------------------------------
 OK, TUNNEL, NONFINITE = 0, 1, 2
@@ -53,6 +55,8 @@ class CollideModel(NamedTuple):
         exponent m; damp_c [-] the damping model's χ·v_k (Eq. (29): χ = damp_c / v_k);
         v_floor [m/s] smallest v_k; mu, v_reg [m/s] friction Eq. (32);
         allow_tunnel: finish a tunnelling run (else stop); gravity (3,) [m/s²] W.
+    Air (``collide.air``): air_density ρ [kg/m³] (0: no air, the default); diameter [m] (ns,)
+        each segment's aerodynamic diameter (Eq. (5)–(8), ``collide.air``; empty when ρ = 0).
     """
 
     seg: np.ndarray
@@ -85,6 +89,8 @@ class CollideModel(NamedTuple):
     v_reg: float
     allow_tunnel: bool
     gravity: np.ndarray
+    air_density: float = 0.0
+    diameter: np.ndarray = np.zeros(0)
 
 
 class CollideState(NamedTuple):

@@ -3,8 +3,9 @@
 World frame W (``flexnet_fe.frames``): the held net is centred on the origin (the centroid of its
 nodes), spread across the x–y plane; the missile flies along
 d = (0, −sin i, cos i) (i the incidence angle, pitched about world x; the paper's cases have
-i = 0, d = +z) towards the aim point (a_x, a_y, 0). No air acts during the impact (assumption 2);
-the net is at rest (assumption 3: "the flexible net is set to static").
+i = 0, d = +z) towards the aim point (a_x, a_y, 0). No air acts during the impact (assumption 2)
+unless ``[collide] air`` (module ``collide.air``: the rope law in still air); the net is at rest
+(assumption 3: "the flexible net is set to static").
 """
 
 from __future__ import annotations

@@ -11,10 +11,12 @@ impulse of every contact is kept exactly).
 
 Energy (history columns ending in ``_j``): missile kinetic (translation + rotation), net
 kinetic, rope elastic, contact stored (Σ K δ^(m+1)/(m+1)), dissipated by rope damping, by
-contact damping, by friction, released by broken ropes, work of gravity and at the crop
-boundary (zero: held nodes do not move), and ``energy_balance_j`` = (sum of the stored and
-dissipated terms − external work) − its initial value. Momentum: missile, free net and the
-impulse taken by the held nodes (W, [N s]); their sum minus the gravity impulse is constant.
+contact damping, by friction, by the air (``dissipated_air_j``, 0 unless ``collide.air``),
+released by broken ropes, work of gravity and at the crop boundary (zero: held nodes do not
+move), and ``energy_balance_j`` = (sum of the stored and dissipated terms − external work) − its
+initial value. Momentum: missile, free net, the impulse taken by the held nodes and the air's
+impulse on the net (``air_impulse_*_ns``; W, [N s]); missile + net + held − air − gravity
+impulse is constant (``momentum_error_ns`` is its drift).
 """
 
 from __future__ import annotations
@@ -27,6 +29,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from flexnet_fe.collide import kernel as K
+from flexnet_fe.collide.air import drag_step_ratio
 from flexnet_fe.collide import model as M
 from flexnet_fe.collide.config import CollideConfig
 from flexnet_fe.collide.crop import (active_segments, boundary_motion, boundary_nodes, crop_reach, free_nodes,
@@ -37,7 +40,7 @@ from flexnet_fe.collide.scene import HeldNet, MissileStart, fin_planes, place_mi
 from flexnet_fe.collide.timestep import StepChoice, choose_step, contact_stiffness
 from flexnet_fe.contact.law import DAMPING_CODE, DampingModel, hysteresis_factor
 from flexnet_fe.contact.restitution import restitution_check
-from flexnet_fe.errors import NumericalError
+from flexnet_fe.errors import FlexnetError, NumericalError
 from flexnet_fe.missile.geometry import Missile
 from flexnet_fe.missile.shapes import pack_shapes, part_names
 from flexnet_fe.progress import progress_bar
@@ -89,8 +92,8 @@ ENERGY_GROWTH_SAMPLES consecutive samples stops with a NumericalError (a blow-up
 ENERGY_GROWTH_SAMPLES = 3
 
 ENERGY_COLUMNS = ("missile_kinetic_j", "net_kinetic_j", "rope_elastic_j", "contact_stored_j", "rope_damping_j",
-                  "contact_damping_j", "friction_j", "broken_release_j", "gravity_work_j", "crop_boundary_work_j",
-                  "energy_balance_j")
+                  "contact_damping_j", "friction_j", "dissipated_air_j", "broken_release_j", "gravity_work_j",
+                  "crop_boundary_work_j", "energy_balance_j")
 HISTORY_COLUMNS = (
     "t_s", "accel_body_x_mps2", "accel_body_y_mps2", "accel_body_z_mps2", "accel_mag_mps2",
     "omega_body_x_rps", "omega_body_y_rps", "omega_body_z_rps", "alpha_body_x_rps2", "alpha_body_y_rps2",
@@ -99,7 +102,8 @@ HISTORY_COLUMNS = (
     "contact_force_mean_n", "contacts", "max_penetration_m", "broken_segments",
     "missile_momentum_x_ns", "missile_momentum_y_ns", "missile_momentum_z_ns",
     "net_momentum_x_ns", "net_momentum_y_ns", "net_momentum_z_ns",
-    "held_impulse_x_ns", "held_impulse_y_ns", "held_impulse_z_ns", "momentum_error_ns") + ENERGY_COLUMNS
+    "held_impulse_x_ns", "held_impulse_y_ns", "held_impulse_z_ns",
+    "air_impulse_x_ns", "air_impulse_y_ns", "air_impulse_z_ns", "momentum_error_ns") + ENERGY_COLUMNS
 
 
 def rotation_vector(q: np.ndarray) -> np.ndarray:
@@ -131,8 +135,9 @@ class Setup:
 
 
 def build(net: HeldNet, missile: Missile, cfg: CollideConfig, gravity: float, log: logging.Logger,
-          crop: bool) -> Setup:
-    """Crop the net, choose the contact stiffness and the time step, pack the kernel model."""
+          crop: bool, air_density: float = 0.0) -> Setup:
+    """Crop the net, choose the contact stiffness and the time step, pack the kernel model
+    (air_density ρ [kg/m³] is the model's when ``cfg.air``, else the model has no air)."""
     model, rope = net.model, net.rope
     shapes = pack_shapes(missile)
     start = place_missile(missile, net.x, cfg)
@@ -171,7 +176,9 @@ def build(net: HeldNet, missile: Missile, cfg: CollideConfig, gravity: float, lo
         fin_planes=fin_planes(shapes), k_body=k_body, k_fin=k_fin, exponent=cfg.contact_exponent,
         damp_c=hysteresis_factor(DAMPING_CODE[cfg.damping_model], cfg.restitution, 1.0),
         v_floor=cfg.damping_min_approach_speed, mu=cfg.friction_coefficient,
-        v_reg=cfg.friction_regularisation_speed, allow_tunnel=bool(cfg.allow_tunnelling), gravity=g_vec)
+        v_reg=cfg.friction_regularisation_speed, allow_tunnel=bool(cfg.allow_tunnelling), gravity=g_vec,
+        air_density=float(air_density) if cfg.air else 0.0,
+        diameter=np.ascontiguousarray(model.diameter[seg_idx], dtype=np.float64))
     boundary = local[boundary_nodes(model.springs, free_full)]
     log.info("collide: %d of %d nodes free (crop reach %.3g m), %d of %d segments active; K_body = %.4g, "
              "K_fin = %.4g N/m^%.2g (%s, rope E_t = %.3g Pa)", int(free_full.sum()), model.n_nodes, reach,
@@ -188,7 +195,8 @@ def _energy_terms(km: M.CollideModel, st: M.CollideState, missile: Missile, iner
     return {"missile_kinetic_j": 0.5 * missile.mass * float(st.mv @ st.mv) + 0.5 * float(w_b @ inertia @ w_b),
             "net_kinetic_j": ke_n, "rope_elastic_j": pe_n, "contact_stored_j": pe_c,
             "rope_damping_j": acc[M.A_DISS_ROPE], "contact_damping_j": acc[M.A_DISS_CONTACT],
-            "friction_j": acc[M.A_DISS_FRICTION], "broken_release_j": acc[M.A_BROKEN],
+            "friction_j": acc[M.A_DISS_FRICTION], "dissipated_air_j": acc[M.A_DISS_AIR],
+            "broken_release_j": acc[M.A_BROKEN],
             "gravity_work_j": acc[M.A_WORK_GRAVITY], "crop_boundary_work_j": 0.0}
 
 
@@ -226,10 +234,11 @@ def _stop_message(status, st, cfg, t, names, setup, dt) -> str:
 
 
 def simulate(net: HeldNet, missile: Missile, cfg: CollideConfig, gravity: float,
-             log: logging.Logger, *, crop: bool | None = None, n_snapshots: int | None = None,
-             dt_scale: float = 1.0) -> CollisionResult:
+             log: logging.Logger, *, air_density: float | None = None, crop: bool | None = None,
+             n_snapshots: int | None = None, dt_scale: float = 1.0) -> CollisionResult:
     """Run the impact of ``missile`` on the held ``net`` per ``cfg`` (gravity g [m/s²] used only
-    if ``cfg.gravity``). The rope near the path is first split per ``cfg.rope_split``
+    if ``cfg.gravity``; air_density ρ [kg/m³], the [atmosphere]'s, needed and used only if
+    ``cfg.air``). The rope near the path is first split per ``cfg.rope_split``
     (``collide.refine``; the result's ``net`` is the split net). Keyword overrides (tests,
     convergence studies): crop, n_snapshots, dt_scale (the chosen dt is multiplied by it).
 
@@ -243,8 +252,11 @@ def simulate(net: HeldNet, missile: Missile, cfg: CollideConfig, gravity: float,
     balance. A crop too small is not an error: ``crop_boundary_motion_m`` in the summary says how
     far the free nodes next to the held ones moved."""
     t_wall = time.perf_counter()
+    if cfg.air and air_density is None:
+        raise FlexnetError("collide: collide.air = true needs the air density of the [atmosphere] (simulate's "
+                           "air_density)")
     net = split_near_path(net, missile, cfg)
-    setup = build(net, missile, cfg, gravity, log, cfg.crop if crop is None else crop)
+    setup = build(net, missile, cfg, gravity, log, cfg.crop if crop is None else crop, air_density or 0.0)
     km, start, step = setup.model, setup.start, setup.step
     n_sub = max(1, math.ceil(cfg.output_interval / (step.dt * dt_scale)))
     dt = cfg.output_interval / n_sub
@@ -255,6 +267,7 @@ def simulate(net: HeldNet, missile: Missile, cfg: CollideConfig, gravity: float,
              step.dt_spring, step.dt_contact, step.dt_travel, cfg.dt_safety, step.expected_penetration,
              step.expected_penetration / net.rope.radius, n_sub * n_min, n_sub * n_max)
     st = M.new_state(net.x[setup.used], km.seg.shape[0], km.fin_half.shape[0], start.x_cg, start.v_cg, start.q)
+    air_ratio = _air_step_check(km, st, cfg, dt)
     rec = _Recorder(km, st, missile, np.asarray(missile.inertia, dtype=np.float64), cfg, start, n_max)
     snap_at = set(np.unique(np.round(np.linspace(0, n_min, cfg.snapshots if n_snapshots is None
                                                   else n_snapshots)).astype(int)).tolist())
@@ -264,12 +277,41 @@ def simulate(net: HeldNet, missile: Missile, cfg: CollideConfig, gravity: float,
     loads = _fin_loads(missile, cfg, run.n_done, run.row_start, run.ev_rows, net.rope.diameter)
     summary = rec.summary(setup, loads, x_start, dt, n_sub * run.n_done, time.perf_counter() - t_wall)
     _end_summary(summary, run, rec, cfg, net)
+    summary.update(_air_summary(km, st, cfg, air_ratio))
     alive = np.ones(net.model.n_springs, dtype=bool)
     alive[setup.seg_idx] = st.alive
     snaps = run.snaps
     return CollisionResult(history=rec.cols, loads=loads, snap_t=np.array(snaps[0]), snap_x=np.array(snaps[1]),
                            snap_apex=np.array(snaps[2]), snap_q=np.array(snaps[3]), summary=summary, step=step,
                            free=setup.free_full, alive=alive, net=net)
+
+
+AIR_SPEED_FACTOR = 2.0
+"""The air's explicit-step check assumes rope speeds up to this × the impact speed and segment
+lengths up to this × their held lengths (a rope dragged by the missile moves at about its speed)."""
+
+
+def _air_step_check(km: M.CollideModel, st: M.CollideState, cfg: CollideConfig, dt: float) -> float:
+    """The air drag's explicit-step ratio (``air.drag_step_ratio``) at AIR_SPEED_FACTOR × the
+    impact speed and the held lengths × AIR_SPEED_FACTOR; 0 without air. Raises NumericalError
+    when ≥ 1 (the drag alone could make the step unstable)."""
+    if km.air_density == 0.0:
+        return 0.0
+    length = np.linalg.norm(st.x[km.seg[:, 1]] - st.x[km.seg[:, 0]], axis=1) * AIR_SPEED_FACTOR
+    ratio = drag_step_ratio(km.mass, km.seg, length, km.diameter, km.air_density,
+                            AIR_SPEED_FACTOR * cfg.impact_speed, dt)
+    if ratio >= 1.0:
+        raise NumericalError(f"collide: with collide.air the rope drag needs dt < {dt / ratio:.3g} s (the step is "
+                             f"{dt:.3g} s): the lightest rope nodes are too light for explicit drag")
+    return ratio
+
+
+def _air_summary(km: M.CollideModel, st: M.CollideState, cfg: CollideConfig, ratio: float) -> dict:
+    """The air's summary keys: on/off, density [kg/m³], work [J], impulse on the net [N s] (3,) W,
+    explicit-step ratio [-]."""
+    return {"air": bool(cfg.air), "air_density_kgpm3": float(km.air_density),
+            "dissipated_air_j": float(st.acc[M.A_DISS_AIR]),
+            "air_impulse_ns": [float(x) for x in st.acc[M.A_IMP_AIR:M.A_IMP_AIR + 3]], "air_drag_step_ratio": ratio}
 
 
 def interaction_over(contacts_last: float, tail_along: float, net_front_along: float, clearance: float) -> bool:
@@ -378,11 +420,12 @@ class _Recorder:
         pm = self.missile.mass * st.mv
         pn = (km.mass[km.free, None] * st.v[km.free]).sum(axis=0)
         held = st.acc[M.A_PHELD:M.A_PHELD + 3]
+        air = st.acc[M.A_IMP_AIR:M.A_IMP_AIR + 3]
         for i, ax in enumerate("xyz"):
             c[f"missile_momentum_{ax}_ns"][k], c[f"net_momentum_{ax}_ns"][k] = pm[i], pn[i]
-            c[f"held_impulse_{ax}_ns"][k] = held[i]
+            c[f"held_impulse_{ax}_ns"][k], c[f"air_impulse_{ax}_ns"][k] = held[i], air[i]
         g_imp = t * (self.missile.mass + km.mass[km.free].sum()) * km.gravity
-        c["momentum_error_ns"][k] = float(np.linalg.norm(pm + pn + held - self.p0 - g_imp))
+        c["momentum_error_ns"][k] = float(np.linalg.norm(pm + pn + held - air - self.p0 - g_imp))
 
     def sample(self, k, t, log) -> np.ndarray:
         """Row k at time t [s]; returns the nose apex [m] (3,) W. Raises on a growing energy balance."""

@@ -54,7 +54,7 @@ def run_collide(net_cfg, deploy_cfg, missile_cfg: MissileConfig, collide_cfg: Co
     log.info("collide: %s net (%s, %d nodes), %s missile (%.1f kg), %.0f m/s, incidence %.3g rad, "
              "aim (%.3g, %.3g) m", net.model.kind, net.source.value, net.model.n_nodes, missile.name,
              missile.mass, collide_cfg.impact_speed, collide_cfg.incidence_angle, *collide_cfg.aim_point)
-    res = simulate(net, missile, collide_cfg, air.gravity, log)
+    res = simulate(net, missile, collide_cfg, air.gravity, log, air_density=air.density)
     net = res.net  # split near the path per collide.rope_split
     write_outputs(res, net.model.springs[res.alive], net.rest_length[res.alive],
                   net.model.stiffness[res.alive], missile, stage_dir)

@@ -86,7 +86,8 @@ def simulate_case(case, ddir, log=LOG):
 
     net = held_net(case.net, case.collide.net_source, ddir)
     missile = build_missile(case.missile)
-    res = simulate(net, missile, case.collide, isa(case.atmosphere.altitude).gravity, log, n_snapshots=2)
+    air = isa(case.atmosphere.altitude)
+    res = simulate(net, missile, case.collide, air.gravity, log, air_density=air.density, n_snapshots=2)
     return net, missile, res
 
 

@@ -86,7 +86,7 @@ def _study(name: str, ctx: Context, out: Path, run_dir: Path | None) -> dict:
             if name == "simplify":
                 from flexnet_fe.study import simplify
 
-                rows = simplify.rows(stage_rows, notes)
+                rows = simplify.rows(stage_rows, notes, ctx)
             else:
                 from flexnet_fe.study import throughput
 

@@ -85,11 +85,11 @@ def collide_map(ctx: Context) -> list[dict]:
     case = case_with(CASE, QUICK_COLLIDE + ("collide.output_interval=1e-4",))
     net = held_net(case.net, case.collide.net_source, None)
     missile = build_missile(case.missile)
-    g = isa(case.atmosphere.altitude).gravity
+    g, rho = isa(case.atmosphere.altitude).gravity, isa(case.atmosphere.altitude).density
     ref, rows = None, []
     for r in ((1.0, 4.0, 16.0, 64.0, 256.0) if ctx.quick else (0.25, 1.0, 4.0, 16.0, 64.0, 256.0)):
         try:
-            res = simulate(net, missile, case.collide, g, LOG, n_snapshots=2, dt_scale=r)
+            res = simulate(net, missile, case.collide, g, LOG, air_density=rho, n_snapshots=2, dt_scale=r)
         except NumericalError as err:
             rows.append(_row("collide", dt_scale=r, dt_over_dt_crit=math.nan, energy_growth=math.nan,
                              status="stopped", message=str(err)[:200]))
@@ -171,7 +171,8 @@ def contact_map(ctx: Context) -> list[dict]:
                 net = held_net(case.net, case.collide.net_source, None)
                 missile = build_missile(case.missile)
                 try:
-                    s = simulate(net, missile, case.collide, 9.81, LOG, n_snapshots=2).summary
+                    s = simulate(net, missile, case.collide, 9.81, LOG, n_snapshots=2,
+                                 air_density=isa(case.atmosphere.altitude).density).summary
                 except NumericalError as err:
                     rows.append(_row("contact", stiffness=k, pass_through_fraction=f, impact_speed_mps=v,
                                      penetration_ratio=math.nan, status="stopped",
