@@ -36,8 +36,8 @@ from flexnet_fe.shell.meshio import load_fin_mesh
 from flexnet_fe.shell.model import ShellModel, build_model
 from flexnet_fe.shell import hotspot
 from flexnet_fe.shell.recovery import build_recovery, locate_peak, stress_tensors, von_mises
-from flexnet_fe.shell.schedule import (IO_LOCK, FinWindow, default_workers, fin_window, run_all,
-                                      window_steps)
+from flexnet_fe.shell.schedule import (AFTER_RATIO_LIMIT, IO_LOCK, FinWindow, default_workers,
+                                      fin_window, run_all, window_steps)
 from flexnet_fe.shell.solve import ParallelSampler, RunResult, recovery_for, run
 from flexnet_fe.runs import ENVELOPE_XDMF, FIELDS_XDMF, HISTORY
 
@@ -493,7 +493,7 @@ def _setup_fin(shell: ShellConfig, spec: FinSpec, contacts: FinContacts, acc_t, 
         window = fin_window(contacts.t, zones.sample, end_time, shell.end_margin, acc_t, acc,
                             fixed_end=shell.end_time is not None)
     else:
-        window = FinWindow(0.0, end_time, 0.0)
+        window = FinWindow(0.0, end_time)
     return prepare_fin(model, loads, shell, window, Path(stage_dir) / spec.name, log,
                        name=spec.name, zones=zones)
 
@@ -507,14 +507,17 @@ def _fin_summary(job: FinJob, res: dict, shell: ShellConfig, spec: FinSpec,
     allow_b = shell.bearing_allowable_factor * spec.yield_strength
     fmax = float(np.linalg.norm(zones.forces, axis=1).max(initial=0.0))
     fin_mass = float(job.loads.mass_c.sum(axis=1).max(initial=0.0))
-    ratio = fin_mass * job.window.neglected_accel_mps2 / fmax if fmax > 0 else 0.0
+    win = job.window
+    before, after = ((fin_mass * a / fmax if fmax > 0 else 0.0)
+                     for a in (win.accel_before_mps2, win.accel_after_mps2))
     res.update(local_mesh_size_m=shell.local_mesh_size, h_min_m=model.h_min,
                peak_bearing_pa=b.peak_pa, peak_bearing_time_s=b.time_s,
                peak_bearing_kind=b.kind, peak_bearing_location_m=b.location_m,
                peak_bearing_force_n=b.force_n, bearing_allowable_pa=allow_b,
                bearing_over_allowable=b.peak_pa / allow_b,
-               window_neglected_accel_mps2=job.window.neglected_accel_mps2,
-               window_neglected_force_ratio=ratio)
+               window_accel_before_mps2=win.accel_before_mps2,
+               window_accel_after_mps2=win.accel_after_mps2,
+               window_force_ratio_before=before, window_force_ratio_after=after)
     if b.peak_pa > allow_b:
         warnings.append(
             f"shell {spec.name}: local bearing/contact stress {b.peak_pa / 1e6:.4g} MPa "
@@ -527,12 +530,15 @@ def _fin_summary(job: FinJob, res: dict, shell: ShellConfig, spec: FinSpec,
             f"an estimated error of {100 * res['peak_error_estimate_rel']:.3g} % (> "
             f"{100 * shell.peak_error_tolerance:.3g} %, shell.peak_error_tolerance): refine "
             f"the fin mesh at the loads (shell.local_mesh_size)")
-    if ratio > shell.peak_error_tolerance:
-        warnings.append(
-            f"shell {spec.name}: the time window ({1e3 * res['start_time_s']:.4g}–"
-            f"{1e3 * res['end_time_s']:.4g} ms) leaves out a body acceleration of up to "
-            f"{job.window.neglected_accel_mps2:.4g} m/s² (fin mass × it = {100 * ratio:.3g} % "
-            f"of the fin's largest contact force): set shell.window = 'full'")
+    span = f"{1e3 * res['start_time_s']:.4g}–{1e3 * res['end_time_s']:.4g} ms"
+    for when, acc, ratio, limit in (("before", win.accel_before_mps2, before,
+                                     shell.peak_error_tolerance),
+                                    ("after", win.accel_after_mps2, after, AFTER_RATIO_LIMIT)):
+        if ratio > limit:
+            warnings.append(
+                f"shell {spec.name}: the time window ({span}) leaves out a body acceleration of "
+                f"up to {acc:.4g} m/s² {when} it (fin mass × it = {100 * ratio:.3g} % of the "
+                f"fin's largest contact force, > {100 * limit:.3g} %): set shell.window = 'full'")
     return res
 
 
@@ -572,11 +578,13 @@ def run_shell(shell: ShellConfig, fins: list[FinSpec], contacts_npz: Path,
     specs = select_fins(shell, fins, contacts)
     jobs = [_setup_fin(shell, spec, contacts, acc_t, acc, stage_dir, end_time, log, comm)
             for spec in specs]
+    t_setup = time.perf_counter()
     workers = 1 if comm.size > 1 else min(shell.workers or default_workers(), max(len(jobs), 1))
     total = sum(j.steps.n_steps for j in jobs)
     log.info("shell: %d fins, %d steps in all, on %d thread(s)", len(jobs), total, workers)
     with progress_bar(total, f"shell ({len(jobs)} fins, {workers} thread(s))") as bar:
         results = run_all(jobs, lambda j: run_fin(j, shell, bar), workers)
+    t_loops = time.perf_counter()
     summary: dict = {}
     warnings: list[str] = []
     for spec, job, res in zip(specs, jobs, results):
@@ -587,5 +595,6 @@ def run_shell(shell: ShellConfig, fins: list[FinSpec], contacts_npz: Path,
                    dt_crit_s=min((r["dt_crit_s"] for r in fs), default=0.0),
                    dofs=sum(r["dofs"] for r in fs), steps=sum(r["steps"] for r in fs),
                    end_time_s=end_time, workers=workers, warnings=warnings,
-                   wall_s=time.perf_counter() - t0)
+                   setup_wall_s=t_setup - t0, loops_wall_s=t_loops - t_setup,
+                   finish_wall_s=time.perf_counter() - t_loops, wall_s=time.perf_counter() - t0)
     return summary

@@ -103,13 +103,13 @@ def test_window_arithmetic():
     w = fin_window(t, np.array([3, 5, 4]), 1.0, 2e-5, np.array([0.0, 5e-5, 1e-4]),
                    np.array([[3.0, 4.0, 0.0], [1.0, 0, 0], [0, 0, 7.0]]), fixed_end=False)
     # zero load up to the sample before the first event; load until the sample after the last
-    assert w == FinWindow(2e-5, 6e-5 + 2e-5, 7.0)  # |a| = 5 at t = 0, 7 at 1e-4 s: outside
+    assert w == FinWindow(2e-5, 6e-5 + 2e-5, 5.0, 7.0)  # |a| = 5 at t = 0 (before), 7 after
     assert fin_window(t, np.array([0]), 1.0, 0.0, t[:0], np.zeros((0, 3)),
-                      fixed_end=True) == FinWindow(0.0, 1.0, 0.0)
-    start, n = window_steps(FinWindow(2e-5, 8e-5, 0.0), 1e-6, 3)
+                      fixed_end=True) == FinWindow(0.0, 1.0, 0.0, 0.0)
+    start, n = window_steps(FinWindow(2e-5, 8e-5), 1e-6, 3)
     assert start % 3 == 0 and start * 1e-6 <= 2e-5 - 3e-6 and start * 1e-6 > 2e-5 - 6e-6 - 1e-12
     assert (start + n) % 3 == 0 and 8e-5 <= (start + n) * 1e-6 < 8e-5 + 3e-6
-    assert window_steps(FinWindow(0.0, 1e-5, 0.0), 1e-6, 4) == (0, 12)
+    assert window_steps(FinWindow(0.0, 1e-5), 1e-6, 4) == (0, 12)
 
 
 def test_run_all_keeps_order_and_raises_after_all_jobs():
@@ -130,3 +130,25 @@ def test_run_all_keeps_order_and_raises_after_all_jobs():
 def test_advance_releases_the_gil():
     # the thread pool gains only if the kernel runs without the GIL
     assert kn.advance.targetoptions.get("nogil") is True
+
+
+def test_body_acceleration_left_out_before_the_window_is_reported(tmp_path):
+    from flexnet_fe.io import write_history_csv
+    fins = make_inputs(tmp_path)
+    # 2 000 m/s² for 0.2 ms, before either fin's first load: the wing (≈ 0.5 kg) gets about
+    # 1 kN of inertial load, comparable with its 1.8 kN rope load — the window must say so
+    t = np.linspace(0.0, 1e-3, 101)
+    write_history_csv(tmp_path / "acc.csv", {
+        "t_s": t, "accel_body_x_mps2": 0 * t, "accel_body_y_mps2": 0 * t,
+        "accel_body_z_mps2": np.where(t <= 2e-4, 2e3, 0.0)})
+    s = run_shell(CFG, fins, tmp_path / "fin_contacts.npz", tmp_path / "acc.csv",
+                  tmp_path / "out", LOG)
+    w = s["wing"]
+    mass = 0.3 * 0.15 * 4e-3 * 2810.0  # minus the clamped root nodes' share
+    assert w["window_accel_before_mps2"] == 2e3 and w["window_accel_after_mps2"] == 0.0
+    assert 0.9 * mass * 2e3 / 1800.0 < w["window_force_ratio_before"] < mass * 2e3 / 1800.0
+    assert any("wing: the time window" in m and "before it" in m for m in s["warnings"])
+    full = run_shell(CFG.model_copy(update={"window": "full"}), fins,
+                     tmp_path / "fin_contacts.npz", tmp_path / "acc.csv", tmp_path / "full", LOG)
+    assert full["wing"]["window_force_ratio_before"] == 0.0
+    assert not any("time window" in m for m in full["warnings"])
