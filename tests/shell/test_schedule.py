@@ -152,3 +152,22 @@ def test_body_acceleration_left_out_before_the_window_is_reported(tmp_path):
                      tmp_path / "fin_contacts.npz", tmp_path / "acc.csv", tmp_path / "full", LOG)
     assert full["wing"]["window_force_ratio_before"] == 0.0
     assert not any("time window" in m for m in full["warnings"])
+
+
+def test_petsc_backend_runs_the_same_window(tmp_path):
+    # Reference: the compiled kernel over the same window. The PETSc step (Mat.mult per step,
+    # frame B) differs from it by the summation order only: histories agree to round-off,
+    # bound 1e-10 of each column's scale as the MPI test (issue 10's backend agreement).
+    a = _run(tmp_path, "compiled", workers=1, end_time=1.3e-3)
+    b = _run(tmp_path, "petsc", workers=1, end_time=1.3e-3, backend="petsc")
+    for name in ("wing", "rudder"):
+        assert a[name]["start_time_s"] > 0 and b[name]["steps"] == a[name]["steps"]
+        assert b[name]["start_time_s"] == a[name]["start_time_s"]
+        ha = read_history_csv(tmp_path / "compiled" / name / "history.csv")
+        hb = read_history_csv(tmp_path / "petsc" / name / "history.csv")
+        for col in ha:
+            scale = np.nanmax(np.abs(ha[col])) or 1.0
+            np.testing.assert_allclose(hb[col], ha[col], rtol=0, atol=1e-10 * scale,
+                                       err_msg=f"{name} {col}")
+        assert b[name]["peak_von_mises_pa"] == pytest.approx(a[name]["peak_von_mises_pa"],
+                                                             rel=1e-10)
