@@ -350,10 +350,12 @@ def prepare_fin(model: ShellModel, loads: LoadHistory, shell: ShellConfig, windo
                   R=R, writer=_FieldWriter(model, R, out_dir / FIELDS_XDMF), out_dir=out_dir)
 
 
-def run_fin(job: FinJob, shell: ShellConfig, bar) -> RunResult:
+def run_fin(job: FinJob, shell: ShellConfig, bar, log: logging.Logger | None = None) -> RunResult:
     """The fin's time loop (callable from a worker thread: the compiled kernel releases the
-    GIL; XDMF frames and progress updates are made under :data:`IO_LOCK`)."""
+    GIL; XDMF frames and progress updates are made under :data:`IO_LOCK`); one log line when it
+    ends."""
     ts = job.steps
+    t0 = time.perf_counter()
     done = [ts.start_step]
 
     def frame(t: float, u: np.ndarray) -> None:
@@ -364,12 +366,16 @@ def run_fin(job: FinJob, shell: ShellConfig, bar) -> RunResult:
                 bar.update(k - done[0])
                 done[0] = k
 
-    return run(job.model, job.loads, job.R, dt=ts.dt, n_steps=ts.n_steps,
-               sample_every=ts.every, frame_every=ts.field_every, alpha=shell.rayleigh_alpha,
-               beta=shell.rayleigh_beta, growth_limit=shell.energy_growth_limit, frame=frame,
-               backend=Backend(shell.backend),
-               exclusion=job.zones.exclusion if job.zones is not None else None,
-               peak_every=ts.peak_every, start_step=ts.start_step)
+    res = run(job.model, job.loads, job.R, dt=ts.dt, n_steps=ts.n_steps,
+              sample_every=ts.every, frame_every=ts.field_every, alpha=shell.rayleigh_alpha,
+              beta=shell.rayleigh_beta, growth_limit=shell.energy_growth_limit, frame=frame,
+              backend=Backend(shell.backend),
+              exclusion=job.zones.exclusion if job.zones is not None else None,
+              peak_every=ts.peak_every, start_step=ts.start_step)
+    if log is not None:
+        log.info("shell %s: %d steps in %.1f s%s", job.name, res.steps,
+                 time.perf_counter() - t0, " (unstable)" if res.failed_at else "")
+    return res
 
 
 def finish_fin(job: FinJob, res: RunResult, shell: ShellConfig) -> dict:
@@ -425,7 +431,7 @@ def solve_fin(model: ShellModel, loads: LoadHistory, shell: ShellConfig, window:
     ``field_interval`` plus the running peak's instants, envelope.xdmf)."""
     job = prepare_fin(model, loads, shell, window, out_dir, log, name=name, zones=zones)
     with progress_bar(job.steps.n_steps, f"shell {name}") as bar:
-        res = run_fin(job, shell, bar)
+        res = run_fin(job, shell, bar, log)
     return finish_fin(job, res, shell)
 
 
@@ -583,7 +589,7 @@ def run_shell(shell: ShellConfig, fins: list[FinSpec], contacts_npz: Path,
     total = sum(j.steps.n_steps for j in jobs)
     log.info("shell: %d fins, %d steps in all, on %d thread(s)", len(jobs), total, workers)
     with progress_bar(total, f"shell ({len(jobs)} fins, {workers} thread(s))") as bar:
-        results = run_all(jobs, lambda j: run_fin(j, shell, bar), workers)
+        results = run_all(jobs, lambda j: run_fin(j, shell, bar, log), workers)
     t_loops = time.perf_counter()
     summary: dict = {}
     warnings: list[str] = []
