@@ -85,8 +85,19 @@ class ShellConfig(Section):
     end_time: Positive | None = Field(
         None, description="simulated time [s]; default: last contact sample time + end_margin")
     end_margin: NonNegative = Field(
-        2e-3, description="time simulated after the last collision sample when end_time is not "
-                          "given [s]")
+        2e-3, description="time simulated after the last collision sample (with window = 'fin': "
+                          "after the fin's own last contact load) when end_time is not given [s]")
+    window: Literal["fin", "full"] = Field(
+        "fin", description="'fin': simulate each fin from just before its first contact load to "
+                           "its last one + end_margin (at rest before: exact; the body "
+                           "acceleration outside the window is left out and reported, "
+                           "flexnet_fe/shell/schedule.py); 'full': every fin from t = 0 to the "
+                           "stage's end")
+    workers: int | None = Field(
+        None, ge=1, description="threads running the fins' time loops at once (the compiled "
+                                "kernel releases the GIL; results do not depend on it); None: the "
+                                "cores this process may use; 1: one fin after the other; under "
+                                "MPI always 1 [-]")
     lanczos_steps: int = Field(
         40, ge=5, le=400, description="Lanczos steps for λ_max(M⁻¹K), hence dt_crit [-]")
     backend: Literal["auto", "compiled", "petsc"] = Field(

@@ -318,9 +318,12 @@ def central_difference(op: ShellOperator, loads: LoadHistory, dt: float, n_steps
                        sample_every: int, *, dt_crit: float, alpha: float = 0.0,
                        beta: float = 0.0, u0: np.ndarray | None = None,
                        v0: np.ndarray | None = None, growth_limit: float = 10.0,
-                       peak_every: int = 0) -> Iterator[Sample]:
+                       peak_every: int = 0, start_step: int = 0) -> Iterator[Sample]:
     """Advance M ü + (αM + βK) u̇ + K u = f(t) by central differences, yielding a
-    :class:`Sample` at step 0 and every ``sample_every`` steps (and at the last step).
+    :class:`Sample` at the start and every ``sample_every`` steps (and at the last step).
+    ``start_step``: the state u0, v0 is at t = start_step dt; the steps keep their absolute
+    numbers (step n at t = n dt, samples at multiples of ``sample_every``), so that a run over a
+    time window gives the samples of a run from t = 0 at the same instants.
 
     Scheme (Belytschko, Liu & Moran 2000, Box 6.1), velocity at half steps:
         a_n = M⁻¹ [f(t_n) − K (u_n + β v_{n−½})] − α v_{n−½}
@@ -358,8 +361,9 @@ def central_difference(op: ShellOperator, loads: LoadHistory, dt: float, n_steps
     ke, se = energies()
     e0 = ke + se
     work = work_net = work_local = 0.0  # Σ|interval work| (the guard's budget), signed work [J]
-    yield Sample(0, 0.0, u, v, ke, se, 0.0)
-    for step in range(1, n_steps + 1):
+    yield Sample(start_step, start_step * dt, u, v, ke, se, 0.0)
+    last = start_step + n_steps
+    for step in range(start_step + 1, last + 1):
         t = (step - 1) * dt
         if beta:
             np.multiply(v, beta, out=w)
@@ -369,8 +373,9 @@ def central_difference(op: ShellOperator, loads: LoadHistory, dt: float, n_steps
             K.mult(uv, fiv)
         loads.evaluate(t, fe)
         # f_ext · Δu summed every step, so load pulses shorter than a sample interval count too.
-        work_local += _update(u, v, fe, fi, nodes, (0.5 * dt if step == 1 else dt, dt, alpha))
-        if step % sample_every == 0 or step == n_steps:
+        h = 0.5 * dt if step == start_step + 1 else dt
+        work_local += _update(u, v, fe, fi, nodes, (h, dt, alpha))
+        if step % sample_every == 0 or step == last:
             tn = step * dt
             ke, se = energies()
             w_int = comm.allreduce(work_local, op=MPI.SUM)

@@ -360,17 +360,23 @@ class RunState(NamedTuple):
 
 # indices into RunState.scal
 S_STEP, S_WORK, S_WORK_INT, S_E0, S_PEAK_VM, S_PEAK_T, S_PEAK_NODE, S_PEAK_P1, S_PEAK_STEP, \
-    S_PEAK_P1_T, S_NSAMP, S_WORK_NET, S_PEAK_RAW = range(13)
+    S_PEAK_P1_T, S_NSAMP, S_WORK_NET, S_PEAK_RAW, S_STEP0 = range(14)
 # S_WORK: Σ over sample intervals of |external work in the interval| [J], the instability
 # guard's energy budget (an upper bound); S_WORK_NET: the signed external work [J] written to
 # the history, so that kinetic + strain − work is the energy balance. S_PEAK_* are the
 # structural peak (outside the St-Venant zones of the active loads); S_PEAK_RAW the largest nodal
-# von Mises anywhere, the zones included [Pa].
-N_SCAL = 13
+# von Mises anywhere, the zones included [Pa]. S_STEP0: the step the run starts from (its state
+# u0, v0 is at t = S_STEP0 dt; the first step is the half step), so that a run over a time
+# window [t0, t1] keeps the absolute step numbers and times of a run from t = 0.
+N_SCAL = 14
 
 
-def new_state(n: int, u0: np.ndarray | None = None, v0: np.ndarray | None = None) -> RunState:
+def new_state(n: int, u0: np.ndarray | None = None, v0: np.ndarray | None = None,
+              start_step: int = 0) -> RunState:
+    """State at step ``start_step`` (t = start_step dt): u0, v0 (n,) or zero."""
     scal = np.zeros(N_SCAL)
+    scal[S_STEP] = start_step
+    scal[S_STEP0] = start_step
     scal[S_PEAK_VM] = -1.0
     scal[S_PEAK_P1] = -np.inf
     scal[S_PEAK_NODE] = -1
@@ -530,9 +536,11 @@ def _fused_step(D, P, St, x, h, acc3, want_se, want_ke):
     return se, work, ke
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def advance(D, P, R, St, H, n_steps):
-    """:func:`advance_steps` with denormals flushed to zero (see ``_FTZ_DAZ``)."""
+    """:func:`advance_steps` with denormals flushed to zero (see ``_FTZ_DAZ``). Releases the
+    GIL (``nogil``): independent fins advance concurrently in threads (the MXCSR is per thread,
+    restored on return)."""
     old = _get_mxcsr()
     _set_mxcsr(old | _FTZ_DAZ)
     status = advance_steps(D, P, R, St, H, n_steps)
@@ -549,6 +557,7 @@ def advance_steps(D, P, R, St, H, n_steps):
     Scheme (Belytschko, Liu & Moran 2000, Box 6.1), velocities at half steps:
         a_n = M⁻¹ [f(t_n) − K (u_n + β v_{n−½})] − α v_{n−½};  v_{n+½} = v_{n−½} + dt a_n
         (first step: v_½ = v_0 + dt/2 a_0);  u_{n+1} = u_n + dt v_{n+½}.
+    The first step is the one after ``St.scal[S_STEP0]``; the time of step n is n dt.
     Returns 0, or the step number (> 0) at which the energy check failed (non-finite, or
     kinetic + strain > growth_limit × (E0 + Σ|work|)).
     """
@@ -562,7 +571,7 @@ def advance_steps(D, P, R, St, H, n_steps):
         t = (step - 1) * P.dt
         kA = _frame_accel(D, t, kA, acc3)
         kL = _scatter_loads(D, t, kL, fe, 1.0)
-        h = 0.5 * P.dt if step == 1 else P.dt
+        h = 0.5 * P.dt if step == int(sc[S_STEP0]) + 1 else P.dt
         if P.beta != 0.0:
             for r in range(len(St.u)):
                 St.x[r] = St.u[r] + P.beta * St.v[r]

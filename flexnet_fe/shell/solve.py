@@ -91,10 +91,12 @@ def run(model: ShellModel, loads: LoadHistory, R: RecoveryData, *, dt: float, n_
         sample_every: int, frame_every: int, alpha: float = 0.0, beta: float = 0.0,
         growth_limit: float = 10.0, frame: FrameFn | None = None,
         backend: Backend = Backend.AUTO, u0: np.ndarray | None = None,
-        exclusion: Exclusion | None = None, peak_every: int = 0) -> RunResult:
-    """Advance ``n_steps`` steps of size ``dt`` [s], sampling stresses every ``sample_every``
-    steps and calling ``frame`` every ``frame_every`` steps (a multiple of sample_every), at
-    step 0 and at the end — and, before a regular frame, at the latest running von Mises peak
+        exclusion: Exclusion | None = None, peak_every: int = 0,
+        start_step: int = 0) -> RunResult:
+    """Advance ``n_steps`` steps of size ``dt`` [s] from step ``start_step`` (the state ``u0``,
+    at rest, is at t = start_step dt; times stay absolute: step n is at t = n dt), sampling
+    stresses every ``sample_every`` steps (at multiples of it) and calling ``frame`` every
+    ``frame_every`` steps (a multiple of sample_every), at the start and at the end — and, before a regular frame, at the latest running von Mises peak
     if it rose since the previous frame (so the frames include the final peak's instant).
     ``exclusion``: owned nodes in the St-Venant zones of each contact sample's loads
     (:mod:`flexnet_fe.shell.hotspot`), left out of the peaks and the history's maxima (not of
@@ -111,11 +113,14 @@ def run(model: ShellModel, loads: LoadHistory, R: RecoveryData, *, dt: float, n_
         raise ValueError("frame_every must be a multiple of sample_every")
     if peak_every < 0 or (peak_every and sample_every % peak_every):
         raise ValueError("peak_every must be 0 or a divisor of sample_every")
+    if start_step < 0 or start_step % sample_every:
+        raise ValueError("start_step must be a non-negative multiple of sample_every")
     go = _run_compiled if backend is Backend.COMPILED else _run_petsc
     return go(model, loads, R, dt=dt, n_steps=n_steps, sample_every=sample_every,
               frame_every=frame_every, alpha=alpha, beta=beta, growth_limit=growth_limit,
               frame=frame or (lambda t, u: None), u0=u0,
-              exclusion=exclusion or no_exclusion(len(loads.times)), peak_every=peak_every)
+              exclusion=exclusion or no_exclusion(len(loads.times)), peak_every=peak_every,
+              start_step=start_step)
 
 
 class LocalFrame:
@@ -155,7 +160,7 @@ def step_data(model: ShellModel, loads: LoadHistory, frame: LocalFrame,
 
 
 def _run_compiled(model, loads, R, *, dt, n_steps, sample_every, frame_every, alpha, beta,
-                  growth_limit, frame, u0, exclusion, peak_every) -> RunResult:
+                  growth_limit, frame, u0, exclusion, peak_every, start_step) -> RunResult:
     op = model.op
     lf = LocalFrame(model.fin.plane)
     D = step_data(model, loads, lf, exclusion)
@@ -163,15 +168,16 @@ def _run_compiled(model, loads, R, *, dt, n_steps, sample_every, frame_every, al
     Pm = kn.StepParams(dt=dt, alpha=alpha, beta=beta, growth_limit=growth_limit,
                        sample_every=sample_every, peak_every=peak_every)
     St = kn.new_state(op.n_owned, None if u0 is None
-                      else lf.to_local(constrain(op, np.array(u0, float))))
+                      else lf.to_local(constrain(op, np.array(u0, float))), start_step=start_step)
     nn = op.n_owned // NDOF_NODE
     H = kn.new_history(n_steps // sample_every + 2, nn)
-    # the sample at step 0 (the kernel samples at multiples of sample_every ≥ 1)
-    _sample0(D, RL, St, H, Pm)
-    frame(0.0, lf.to_body(St.u))
-    done, failed, last_peak_step = 0, 0, 0  # step 0 is the t = 0 frame already written
-    while done < n_steps and not failed:
-        n = min(frame_every - done % frame_every, n_steps - done)
+    # the sample at the start (the kernel samples at the multiples of sample_every it reaches)
+    _sample0(D, RL, St, H, Pm, start_step)
+    frame(start_step * dt, lf.to_body(St.u))
+    end = start_step + n_steps
+    done, failed, last_peak_step = start_step, 0, start_step  # the start frame is written
+    while done < end and not failed:
+        n = min(frame_every - done % frame_every, end - done)
         failed = kn.advance(D, Pm, RL, St, H, n)
         done = int(St.scal[kn.S_STEP])
         if failed:
@@ -190,15 +196,17 @@ def _run_compiled(model, loads, R, *, dt, n_steps, sample_every, frame_every, al
                      se=H.se[:ns].copy(), work=H.work[:ns].copy(), env=H.env,
                      peak_vm=float(sc[kn.S_PEAK_VM]), peak_t=float(sc[kn.S_PEAK_T]),
                      peak_node=int(sc[kn.S_PEAK_NODE]), peak_p1=float(sc[kn.S_PEAK_P1]),
-                     u_peak=lf.to_body(St.u_peak), steps=done, failed_at=int(failed),
+                     u_peak=lf.to_body(St.u_peak), steps=done - start_step,
+                     failed_at=int(failed),
                      u=lf.to_body(St.u), peak_raw=float(sc[kn.S_PEAK_RAW]))
 
 
-def _sample0(D, R, St, H, Pm):
-    """History row 0 (t = 0) in the compiled path."""
+def _sample0(D, R, St, H, Pm, start_step: int = 0):
+    """History row 0 (the start, t = start_step dt) in the compiled path."""
     sc = St.scal
-    kn._sample(D, R, St, H, 0, 0, 0.0)
-    H.t[0] = 0.0
+    t0 = start_step * Pm.dt
+    kn._sample(D, R, St, H, 0, start_step, t0)
+    H.t[0] = t0
     H.ke[0] = 0.5 * float(D.mass @ (St.v * St.v))
     kn.split_product(D.K, St.u, St.y)
     se = 0.5 * float(St.u @ St.y)
@@ -250,7 +258,7 @@ def _masked_max(nodal: np.ndarray, exclusion: Exclusion, times: np.ndarray, t: f
 
 
 def _run_petsc(model, loads, R, *, dt, n_steps, sample_every, frame_every, alpha, beta,
-               growth_limit, frame, u0, exclusion, peak_every) -> RunResult:
+               growth_limit, frame, u0, exclusion, peak_every, start_step) -> RunResult:
     from flexnet_fe.errors import NumericalError
 
     op = model.op
@@ -260,10 +268,11 @@ def _run_petsc(model, loads, R, *, dt, n_steps, sample_every, frame_every, alpha
     env = np.zeros((nn, 2))
     rows = {k: [] for k in ("t", "vm", "loc", "p1", "umax", "ke", "se", "work")}
     peak = dict(vm=-1.0, t=0.0, node=-1, p1=-np.inf, step=-1, u=np.zeros(op.n_owned), raw=0.0)
-    last_peak_step, done, failed = -1, 0, 0
+    last_peak_step, done, failed = -1, start_step, 0
     last_u = np.zeros(op.n_owned)
     gen = central_difference(op, loads, dt, n_steps, sample_every, dt_crit=dt, alpha=alpha,
-                             beta=beta, u0=u0, growth_limit=growth_limit, peak_every=peak_every)
+                             beta=beta, u0=u0, growth_limit=growth_limit, peak_every=peak_every,
+                             start_step=start_step)
     try:
         for smp in gen:
             vraw, _, _, umax = sampler(smp.u)
@@ -288,7 +297,7 @@ def _run_petsc(model, loads, R, *, dt, n_steps, sample_every, frame_every, alpha
             peak["p1"] = max(peak["p1"], p1g)
             done = smp.step
             last_u = smp.u
-            if smp.step % frame_every == 0 or smp.step == n_steps:
+            if smp.step % frame_every == 0 or smp.step == start_step + n_steps:
                 if peak["step"] != last_peak_step and 0 <= peak["step"] < smp.step:
                     frame(peak["t"], peak["u"])
                 last_peak_step = peak["step"]
@@ -299,5 +308,6 @@ def _run_petsc(model, loads, R, *, dt, n_steps, sample_every, frame_every, alpha
     return RunResult(t=arr["t"], vm=arr["vm"], loc=arr["loc"].reshape(-1, 3), p1=arr["p1"],
                      umax=arr["umax"], ke=arr["ke"], se=arr["se"], work=arr["work"], env=env,
                      peak_vm=peak["vm"], peak_t=peak["t"], peak_node=peak["node"],
-                     peak_p1=peak["p1"], u_peak=peak["u"], steps=done, failed_at=failed,
+                     peak_p1=peak["p1"], u_peak=peak["u"], steps=done - start_step,
+                     failed_at=failed,
                      u=last_u, peak_raw=peak["raw"])

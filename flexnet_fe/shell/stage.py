@@ -36,7 +36,9 @@ from flexnet_fe.shell.meshio import load_fin_mesh
 from flexnet_fe.shell.model import ShellModel, build_model
 from flexnet_fe.shell import hotspot
 from flexnet_fe.shell.recovery import build_recovery, locate_peak, stress_tensors, von_mises
-from flexnet_fe.shell.solve import ParallelSampler, recovery_for, run
+from flexnet_fe.shell.schedule import (AFTER_RATIO_LIMIT, IO_LOCK, FinWindow, default_workers,
+                                      fin_window, run_all, window_steps)
+from flexnet_fe.shell.solve import ParallelSampler, RunResult, recovery_for, run
 from flexnet_fe.runs import ENVELOPE_XDMF, FIELDS_XDMF, HISTORY
 
 ACCEL_COLUMNS = ("accel_body_x_mps2", "accel_body_y_mps2", "accel_body_z_mps2")
@@ -237,8 +239,26 @@ class _FieldWriter:
                 f.write_function(fc, 0.0)
 
 
-def _time_steps(model: ShellModel, shell: ShellConfig, end_time: float, log, name: str):
-    """dt_crit (Lanczos), dt, step count, sampling and frame strides."""
+@dataclass(frozen=True)
+class TimeSteps:
+    """A fin's step size and schedule (steps numbered from t = 0: step n is at t = n dt)."""
+
+    dt: float
+    dt_crit: float
+    start_step: int
+    """the window's first step (a history row; the fin is at rest there)"""
+    n_steps: int
+    every: int
+    """history rows every that many steps"""
+    peak_every: int
+    """stresses for the peaks and the envelope every that many steps"""
+    field_every: int
+    dofs: int
+
+
+def _time_steps(model: ShellModel, shell: ShellConfig, window: FinWindow, log,
+                name: str) -> TimeSteps:
+    """dt_crit (Lanczos), dt, the window's steps, sampling and frame strides."""
     lam, resid = max_eigenvalue(model.op, steps=shell.lanczos_steps)
     dt_crit = critical_step(lam, shell.rayleigh_alpha, shell.rayleigh_beta)
     dt = shell.safety_factor * dt_crit
@@ -246,18 +266,20 @@ def _time_steps(model: ShellModel, shell: ShellConfig, end_time: float, log, nam
     every = peak_every * max(1, round(shell.history_interval / (dt * peak_every)))
     # whole sampling intervals, so that the last step is a sample in both backends (the PETSc
     # path also samples the last step; the compiled one samples multiples of ``every`` only)
-    n_steps = every * max(1, math.ceil(end_time / (dt * every)))
-    field_dt = shell.field_interval or end_time / 10.0
+    start, n_steps = window_steps(window, dt, every)
+    field_dt = shell.field_interval or n_steps * dt / 10.0
     field_every = max(every, round(field_dt / dt / every) * every)
     mat = model.material
     c_p = math.sqrt(mat.plane_stress_modulus / mat.density)
     dofs = model.V.dofmap.index_map.size_global * NDOF_NODE
     log.info("shell %s: %d DOFs, rotary inertia ×%.3g, dt_crit = %.4e s (Lanczos, %d steps, "
              "residual %.1e), dt = %.4e s (×%.2f), element estimate h_min/c_p = %.4e s, "
-             "%d steps to %.4e s, stresses every %d steps (history rows every %d)", name, dofs,
-             model.rotary_scale, dt_crit, shell.lanczos_steps, resid, dt, shell.safety_factor,
-             model.h_min / c_p, n_steps, end_time, peak_every, every)
-    return dt_crit, dt, n_steps, every, field_every, dofs, peak_every
+             "%d steps from %.4e s to %.4e s, stresses every %d steps (history rows every %d)",
+             name, dofs, model.rotary_scale, dt_crit, shell.lanczos_steps, resid, dt,
+             shell.safety_factor, model.h_min / c_p, n_steps, start * dt,
+             (start + n_steps) * dt, peak_every, every)
+    return TimeSteps(dt=dt, dt_crit=dt_crit, start_step=start, n_steps=n_steps, every=every,
+                     peak_every=peak_every, field_every=field_every, dofs=dofs)
 
 
 def _whole_fin(model: ShellModel, R, u_owned: np.ndarray, node: int):
@@ -301,35 +323,67 @@ def _peak(model: ShellModel, R, res, zones: FinZones | None):
     return comm.bcast(pk, root=0)
 
 
-def solve_fin(model: ShellModel, loads: LoadHistory, shell: ShellConfig, end_time: float,
-              out_dir: Path, log: logging.Logger, *, name: str,
-              zones: FinZones | None = None) -> dict:
-    """Run one fin to ``end_time`` [s]; write history.csv, fields.xdmf (frames every
-    ``field_interval`` plus the running peak's instants), envelope.xdmf in ``out_dir``; return
-    the fin's summary (peaks with their error estimate, dt, dt_crit, dofs, steps)."""
-    comm = model.V.mesh.comm
-    out_dir.mkdir(parents=True, exist_ok=True)
-    dt_crit, dt, n_steps, every, field_every, dofs, peak_every = _time_steps(model, shell,
-                                                                             end_time, log, name)
-    R = recovery_for(model)
-    writer = _FieldWriter(model, R, out_dir / FIELDS_XDMF)
-    with progress_bar(n_steps, f"shell {name}") as bar:
-        done = [0]
+@dataclass
+class FinJob:
+    """One fin ready to run: model, loads and output set up (serially, dolfinx)."""
 
-        def frame(t: float, u: np.ndarray) -> None:
-            writer.write(t, u)
-            k = min(n_steps, int(round(t / dt)))
+    name: str
+    model: ShellModel
+    loads: LoadHistory
+    zones: FinZones | None
+    window: FinWindow
+    steps: TimeSteps
+    R: object
+    """recovery data (:class:`flexnet_fe.shell.recovery.RecoveryData`)"""
+    writer: _FieldWriter
+    out_dir: Path
+
+
+def prepare_fin(model: ShellModel, loads: LoadHistory, shell: ShellConfig, window: FinWindow,
+                out_dir: Path, log: logging.Logger, *, name: str,
+                zones: FinZones | None = None) -> FinJob:
+    """dt (Lanczos), recovery data and the XDMF writer of one fin (serial: dolfinx calls)."""
+    out_dir.mkdir(parents=True, exist_ok=True)
+    steps = _time_steps(model, shell, window, log, name)
+    R = recovery_for(model)
+    return FinJob(name=name, model=model, loads=loads, zones=zones, window=window, steps=steps,
+                  R=R, writer=_FieldWriter(model, R, out_dir / FIELDS_XDMF), out_dir=out_dir)
+
+
+def run_fin(job: FinJob, shell: ShellConfig, bar, log: logging.Logger | None = None) -> RunResult:
+    """The fin's time loop (callable from a worker thread: the compiled kernel releases the
+    GIL; XDMF frames and progress updates are made under :data:`IO_LOCK`); one log line when it
+    ends."""
+    ts = job.steps
+    t0 = time.perf_counter()
+    done = [ts.start_step]
+
+    def frame(t: float, u: np.ndarray) -> None:
+        with IO_LOCK:
+            job.writer.write(t, u)
+            k = min(ts.start_step + ts.n_steps, int(round(t / ts.dt)))
             if k > done[0]:
                 bar.update(k - done[0])
                 done[0] = k
 
-        res = run(model, loads, R, dt=dt, n_steps=n_steps, sample_every=every,
-                  frame_every=field_every, alpha=shell.rayleigh_alpha, beta=shell.rayleigh_beta,
-                  growth_limit=shell.energy_growth_limit, frame=frame,
-                  backend=Backend(shell.backend),
-                  exclusion=zones.exclusion if zones is not None else None,
-                  peak_every=peak_every)
-    pk = None if res.failed_at else _peak(model, R, res, zones)
+    res = run(job.model, job.loads, job.R, dt=ts.dt, n_steps=ts.n_steps,
+              sample_every=ts.every, frame_every=ts.field_every, alpha=shell.rayleigh_alpha,
+              beta=shell.rayleigh_beta, growth_limit=shell.energy_growth_limit, frame=frame,
+              backend=Backend(shell.backend),
+              exclusion=job.zones.exclusion if job.zones is not None else None,
+              peak_every=ts.peak_every, start_step=ts.start_step)
+    if log is not None:
+        log.info("shell %s: %d steps in %.1f s%s", job.name, res.steps,
+                 time.perf_counter() - t0, " (unstable)" if res.failed_at else "")
+    return res
+
+
+def finish_fin(job: FinJob, res: RunResult, shell: ShellConfig) -> dict:
+    """Locate the peak, write history.csv and envelope.xdmf (serial); return the fin's summary
+    (peaks with their error estimate, dt, dt_crit, dofs, steps, window). Raises
+    :class:`NumericalError` (after writing the history) if the run blew up."""
+    model, ts, comm = job.model, job.steps, job.model.V.mesh.comm
+    pk = None if res.failed_at else _peak(model, job.R, res, job.zones)
     vm, loc = res.vm.copy(), res.loc.copy()
     if pk is not None:  # the row nearest the peak's instant carries the located peak
         i = int(np.argmin(np.abs(res.t - res.peak_t)))
@@ -339,32 +393,46 @@ def solve_fin(model: ShellModel, loads: LoadHistory, shell: ShellConfig, end_tim
             "max_principal_pa": res.p1, "max_abs_u_m": res.umax, "kinetic_energy_j": res.ke,
             "strain_energy_j": res.se, "external_work_j": res.work}
     if comm.rank == 0:
-        write_history_csv(out_dir / HISTORY, cols)
-    writer.envelope(res.env, out_dir / ENVELOPE_XDMF)
+        write_history_csv(job.out_dir / HISTORY, cols)
+    job.writer.envelope(res.env, job.out_dir / ENVELOPE_XDMF)
     if res.failed_at:
         raise NumericalError(
-            f"shell solver unstable at step {res.failed_at} (t = {res.failed_at * dt:.6e} s): "
+            f"shell solver unstable at step {res.failed_at} (t = {res.failed_at * ts.dt:.6e} s): "
             f"kinetic + strain energy exceeds {shell.energy_growth_limit} × (initial energy + "
-            f"external work); dt = {dt:.4e} s, dt_crit = {dt_crit:.4e} s "
-            f"(dt/dt_crit = {dt / dt_crit:.3f})")
+            f"external work); dt = {ts.dt:.4e} s, dt_crit = {ts.dt_crit:.4e} s "
+            f"(dt/dt_crit = {ts.dt / ts.dt_crit:.3f})")
     mat = model.material
     c_p = math.sqrt(mat.plane_stress_modulus / mat.density)
-    out = {"peak_von_mises_pa": float(vm.max(initial=0.0)), "peak_time_s": res.peak_t,
-           "peak_location_m": [float(v) for v in pk.location] if pk else None,
-           "peak_surface": pk.surface if pk else None,
-           "peak_error_estimate_rel": pk.error_estimate_rel if pk else 0.0,
-           "peak_nodal_von_mises_pa": max(res.peak_vm, 0.0),
-           "peak_von_mises_with_load_zones_pa": res.peak_raw,
-           "stvenant_radius_m": (float(zones.radius.max(initial=0.0)) if zones is not None
-                                 else 0.0),
-           "peak_max_principal_pa": res.peak_p1,
-           "allowable_pa": mat.yield_strength,
-           "peak_over_allowable": float(vm.max(initial=0.0)) / mat.yield_strength,
-           "max_abs_u_m": float(res.umax.max(initial=0.0)),
-           "dt_s": dt, "dt_crit_s": dt_crit, "dt_element_estimate_s": model.h_min / c_p,
-           "rotary_inertia_scale": model.rotary_scale, "dofs": dofs, "steps": n_steps,
-           "sample_interval_s": every * dt, "peak_interval_s": peak_every * dt}
-    return out
+    peak = float(vm.max(initial=0.0))
+    return {"peak_von_mises_pa": peak, "peak_time_s": res.peak_t,
+            "peak_location_m": [float(v) for v in pk.location] if pk else None,
+            "peak_surface": pk.surface if pk else None,
+            "peak_error_estimate_rel": pk.error_estimate_rel if pk else 0.0,
+            "peak_nodal_von_mises_pa": max(res.peak_vm, 0.0),
+            "peak_von_mises_with_load_zones_pa": res.peak_raw,
+            "stvenant_radius_m": (float(job.zones.radius.max(initial=0.0))
+                                  if job.zones is not None else 0.0),
+            "peak_max_principal_pa": res.peak_p1,
+            "allowable_pa": mat.yield_strength,
+            "peak_over_allowable": peak / mat.yield_strength,
+            "max_abs_u_m": float(res.umax.max(initial=0.0)),
+            "dt_s": ts.dt, "dt_crit_s": ts.dt_crit, "dt_element_estimate_s": model.h_min / c_p,
+            "rotary_inertia_scale": model.rotary_scale, "dofs": ts.dofs, "steps": ts.n_steps,
+            "start_time_s": ts.start_step * ts.dt,
+            "end_time_s": (ts.start_step + ts.n_steps) * ts.dt,
+            "sample_interval_s": ts.every * ts.dt, "peak_interval_s": ts.peak_every * ts.dt}
+
+
+def solve_fin(model: ShellModel, loads: LoadHistory, shell: ShellConfig, window: FinWindow,
+              out_dir: Path, log: logging.Logger, *, name: str,
+              zones: FinZones | None = None) -> dict:
+    """One fin over its ``window``, in this thread: :func:`prepare_fin`, :func:`run_fin`,
+    :func:`finish_fin`; outputs in ``out_dir`` (history.csv, fields.xdmf with frames every
+    ``field_interval`` plus the running peak's instants, envelope.xdmf)."""
+    job = prepare_fin(model, loads, shell, window, out_dir, log, name=name, zones=zones)
+    with progress_bar(job.steps.n_steps, f"shell {name}") as bar:
+        res = run_fin(job, shell, bar, log)
+    return finish_fin(job, res, shell)
 
 
 def fin_specs(fins, mesh_paths: dict) -> list[FinSpec]:
@@ -412,12 +480,91 @@ def _fin_mesh_path(shell: ShellConfig, spec: FinSpec, contacts: FinContacts, idx
     return path
 
 
+def _setup_fin(shell: ShellConfig, spec: FinSpec, contacts: FinContacts, acc_t, acc,
+               stage_dir: Path, end_time: float, log, comm) -> FinJob:
+    """Mesh, model, loads, St-Venant zones, window and output of one fin (serial, dolfinx)."""
+    idx = contacts.fin_names.index(spec.name) if spec.name in contacts.fin_names else -1
+    fin_mesh = load_fin_mesh(_fin_mesh_path(shell, spec, contacts, idx, stage_dir, comm), comm)
+    mat = ShellMaterial(thickness=spec.thickness, youngs_modulus=spec.youngs_modulus,
+                        poisson_ratio=spec.poisson_ratio, density=spec.density,
+                        yield_strength=spec.yield_strength,
+                        shear_correction=shell.shear_correction)
+    model = build_model(fin_mesh, mat, shell.rotary_inertia_scale, supports=dict(shell.supports))
+    if shell.load is not None:
+        loads = pressure_history(model, shell.load.times, shell.load.pressure)
+    else:
+        loads = fin_load_history(model, contacts, idx, acc_t, acc)
+    zones = FinZones(model, contacts, idx, shell.stvenant_radius_factor)
+    if shell.window == "fin" and shell.load is None:
+        window = fin_window(contacts.t, zones.sample, end_time, shell.end_margin, acc_t, acc,
+                            fixed_end=shell.end_time is not None)
+    else:
+        window = FinWindow(0.0, end_time)
+    return prepare_fin(model, loads, shell, window, Path(stage_dir) / spec.name, log,
+                       name=spec.name, zones=zones)
+
+
+def _fin_summary(job: FinJob, res: dict, shell: ShellConfig, spec: FinSpec,
+                 warnings: list[str]) -> dict:
+    """The fin's summary completed with the closed-form bearing stress and the window's
+    neglected body acceleration; their warnings appended to ``warnings``."""
+    zones, model = job.zones, job.model
+    b = zones.bearing(model, shell.bearing_rope_modulus)
+    allow_b = shell.bearing_allowable_factor * spec.yield_strength
+    fmax = float(np.linalg.norm(zones.forces, axis=1).max(initial=0.0))
+    fin_mass = float(job.loads.mass_c.sum(axis=1).max(initial=0.0))
+    win = job.window
+    before, after = ((fin_mass * a / fmax if fmax > 0 else 0.0)
+                     for a in (win.accel_before_mps2, win.accel_after_mps2))
+    res.update(local_mesh_size_m=shell.local_mesh_size, h_min_m=model.h_min,
+               peak_bearing_pa=b.peak_pa, peak_bearing_time_s=b.time_s,
+               peak_bearing_kind=b.kind, peak_bearing_location_m=b.location_m,
+               peak_bearing_force_n=b.force_n, bearing_allowable_pa=allow_b,
+               bearing_over_allowable=b.peak_pa / allow_b,
+               window_accel_before_mps2=win.accel_before_mps2,
+               window_accel_after_mps2=win.accel_after_mps2,
+               window_force_ratio_before=before, window_force_ratio_after=after)
+    if b.peak_pa > allow_b:
+        warnings.append(
+            f"shell {spec.name}: local bearing/contact stress {b.peak_pa / 1e6:.4g} MPa "
+            f"({b.kind} load {b.force_n / 1e3:.3g} kN at {1e3 * b.time_s:.4g} ms, closed "
+            f"form) exceeds the bearing allowable {allow_b / 1e6:.4g} MPa "
+            f"({shell.bearing_allowable_factor:g} x yield): the fin is crushed there")
+    if res["peak_error_estimate_rel"] > shell.peak_error_tolerance:
+        warnings.append(
+            f"shell {spec.name}: peak von Mises {res['peak_von_mises_pa'] / 1e6:.4g} MPa has "
+            f"an estimated error of {100 * res['peak_error_estimate_rel']:.3g} % (> "
+            f"{100 * shell.peak_error_tolerance:.3g} %, shell.peak_error_tolerance): refine "
+            f"the fin mesh at the loads (shell.local_mesh_size)")
+    span = f"{1e3 * res['start_time_s']:.4g}–{1e3 * res['end_time_s']:.4g} ms"
+    for when, acc, ratio, limit in (("before", win.accel_before_mps2, before,
+                                     shell.peak_error_tolerance),
+                                    ("after", win.accel_after_mps2, after, AFTER_RATIO_LIMIT)):
+        if ratio > limit:
+            warnings.append(
+                f"shell {spec.name}: the time window ({span}) leaves out a body acceleration of "
+                f"up to {acc:.4g} m/s² {when} it (fin mass × it = {100 * ratio:.3g} % of the "
+                f"fin's largest contact force, > {100 * limit:.3g} %): set shell.window = 'full'")
+    return res
+
+
+def _end_time(shell: ShellConfig, contacts: FinContacts, acc_t: np.ndarray) -> float:
+    last = max(contacts.t[-1] if len(contacts.t) else 0.0, acc_t[-1] if len(acc_t) else 0.0,
+               shell.load.times[-1] if shell.load is not None else 0.0)
+    end_time = shell.end_time or last + shell.end_margin
+    if end_time <= 0:
+        raise CaseError("case.toml", "shell.end_time", "no contact samples and no end_time")
+    return end_time
+
+
 def run_shell(shell: ShellConfig, fins: list[FinSpec], contacts_npz: Path,
               collide_history_csv: Path | None, stage_dir: Path, log: logging.Logger,
               comm: MPI.Comm = MPI.COMM_WORLD) -> dict:
     """The shell stage. Returns the ``shell`` section of summary.json: per fin name
     ``peak_von_mises_pa, peak_time_s, peak_location_m, peak_max_principal_pa`` (and more), plus
-    ``dt_s`` (smallest), ``dt_crit_s`` (smallest), ``dofs`` (total), ``steps`` (total), ``wall_s``.
+    ``dt_s`` (smallest), ``dt_crit_s`` (smallest), ``dofs`` (total), ``steps`` (total),
+    ``workers``, ``wall_s``. The fins are set up one after the other (dolfinx), then their time
+    loops run on ``shell.workers`` threads (one under MPI), then each is finished in order.
     """
     t0 = time.perf_counter()
     if shell.load is not None:  # a given pressure replaces the collision loads
@@ -433,56 +580,27 @@ def run_shell(shell: ShellConfig, fins: list[FinSpec], contacts_npz: Path,
     unknown = [n for n in contacts.fin_names if n not in {f.name for f in fins}]
     if unknown:
         raise CaseError(str(contacts_npz), "fin_names", f"fin(s) {unknown} not in the missile model")
-    last = max(contacts.t[-1] if len(contacts.t) else 0.0, acc_t[-1] if len(acc_t) else 0.0,
-               shell.load.times[-1] if shell.load is not None else 0.0)
-    end_time = shell.end_time or last + shell.end_margin
-    if end_time <= 0:
-        raise CaseError("case.toml", "shell.end_time", "no contact samples and no end_time")
+    end_time = _end_time(shell, contacts, acc_t)
+    specs = select_fins(shell, fins, contacts)
+    jobs = [_setup_fin(shell, spec, contacts, acc_t, acc, stage_dir, end_time, log, comm)
+            for spec in specs]
+    t_setup = time.perf_counter()
+    workers = 1 if comm.size > 1 else min(shell.workers or default_workers(), max(len(jobs), 1))
+    total = sum(j.steps.n_steps for j in jobs)
+    log.info("shell: %d fins, %d steps in all, on %d thread(s)", len(jobs), total, workers)
+    with progress_bar(total, f"shell ({len(jobs)} fins, {workers} thread(s))") as bar:
+        results = run_all(jobs, lambda j: run_fin(j, shell, bar, log), workers)
+    t_loops = time.perf_counter()
     summary: dict = {}
     warnings: list[str] = []
-    dts, dtcs, dofs, steps = [], [], 0, 0
-    for spec in select_fins(shell, fins, contacts):
-        idx = contacts.fin_names.index(spec.name) if spec.name in contacts.fin_names else -1
-        fin_mesh = load_fin_mesh(_fin_mesh_path(shell, spec, contacts, idx, stage_dir, comm),
-                                 comm)
-        mat = ShellMaterial(thickness=spec.thickness, youngs_modulus=spec.youngs_modulus,
-                            poisson_ratio=spec.poisson_ratio, density=spec.density,
-                            yield_strength=spec.yield_strength,
-                            shear_correction=shell.shear_correction)
-        model = build_model(fin_mesh, mat, shell.rotary_inertia_scale,
-                            supports=dict(shell.supports))
-        if shell.load is not None:
-            loads = pressure_history(model, shell.load.times, shell.load.pressure)
-        else:
-            loads = fin_load_history(model, contacts, idx, acc_t, acc)
-        zones = FinZones(model, contacts, idx, shell.stvenant_radius_factor)
-        res = solve_fin(model, loads, shell, end_time, Path(stage_dir) / spec.name, log,
-                        name=spec.name, zones=zones)
-        b = zones.bearing(model, shell.bearing_rope_modulus)
-        allow_b = shell.bearing_allowable_factor * spec.yield_strength
-        res.update(local_mesh_size_m=shell.local_mesh_size, h_min_m=model.h_min,
-                   peak_bearing_pa=b.peak_pa, peak_bearing_time_s=b.time_s,
-                   peak_bearing_kind=b.kind, peak_bearing_location_m=b.location_m,
-                   peak_bearing_force_n=b.force_n, bearing_allowable_pa=allow_b,
-                   bearing_over_allowable=b.peak_pa / allow_b)
-        if b.peak_pa > allow_b:
-            warnings.append(
-                f"shell {spec.name}: local bearing/contact stress {b.peak_pa / 1e6:.4g} MPa "
-                f"({b.kind} load {b.force_n / 1e3:.3g} kN at {1e3 * b.time_s:.4g} ms, closed "
-                f"form) exceeds the bearing allowable {allow_b / 1e6:.4g} MPa "
-                f"({shell.bearing_allowable_factor:g} x yield): the fin is crushed there")
-        summary[spec.name] = res
-        if res["peak_error_estimate_rel"] > shell.peak_error_tolerance:
-            warnings.append(
-                f"shell {spec.name}: peak von Mises {res['peak_von_mises_pa'] / 1e6:.4g} MPa has "
-                f"an estimated error of {100 * res['peak_error_estimate_rel']:.3g} % (> "
-                f"{100 * shell.peak_error_tolerance:.3g} %, shell.peak_error_tolerance): refine "
-                f"the fin mesh at the loads (shell.local_mesh_size)")
-        dts.append(res["dt_s"])
-        dtcs.append(res["dt_crit_s"])
-        dofs += res["dofs"]
-        steps += res["steps"]
-    summary.update(dt_s=min(dts, default=0.0), dt_crit_s=min(dtcs, default=0.0), dofs=dofs,
-                   steps=steps, end_time_s=end_time, warnings=warnings,
-                   wall_s=time.perf_counter() - t0)
+    for spec, job, res in zip(specs, jobs, results):
+        summary[spec.name] = _fin_summary(job, finish_fin(job, res, shell), shell, spec,
+                                          warnings)
+    fs = [summary[s.name] for s in specs]
+    summary.update(dt_s=min((r["dt_s"] for r in fs), default=0.0),
+                   dt_crit_s=min((r["dt_crit_s"] for r in fs), default=0.0),
+                   dofs=sum(r["dofs"] for r in fs), steps=sum(r["steps"] for r in fs),
+                   end_time_s=end_time, workers=workers, warnings=warnings,
+                   setup_wall_s=t_setup - t0, loops_wall_s=t_loops - t_setup,
+                   finish_wall_s=time.perf_counter() - t_loops, wall_s=time.perf_counter() - t0)
     return summary

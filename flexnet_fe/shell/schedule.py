@@ -1,0 +1,117 @@
+"""When each fin is simulated, and on how many threads the fins run.
+
+Time window. A fin at rest under zero load stays exactly at rest (u = v = 0 solves the
+undamped or damped equations of motion with f = 0), so a fin needs simulating only from just
+before its first contact load to its last contact load plus ``shell.end_margin``. The contact
+loads are linear between samples (:mod:`flexnet_fe.shell.kernel`), so the load of a fin whose
+first event is at sample j is zero up to t_{j−1}: the window starts one history interval before
+that, on the history grid of a run from t = 0 (same step numbers and times, hence the same
+numbers: ``tests/shell/test_schedule.py``). It ends at the sample after the fin's last event
+(where its interpolated load returns to zero) plus ``end_margin``.
+
+Departure: the body (frame) acceleration of ``collide/history.csv`` loads every fin with
+−m a(t) during the whole collision, including outside the fin's contact window. The window
+leaves it out there. Its size is reported per fin, before and after the window
+(``window_accel_before_mps2`` / ``_after_``: the largest |a| at the acceleration samples
+outside the window; ``window_force_ratio_before`` / ``_after``: fin mass × that over the fin's
+largest contact force). Before the window it changes the state the window starts from, an
+error of the order of that ratio on the peak at most (a distributed inertial load stresses a
+fin less per newton than a concentrated rope load): a warning above
+``shell.peak_error_tolerance``. After the window it could only matter by making a later,
+larger peak, which needs a load comparable with the fin's own contact loads: a warning above
+0.5. On radar × traction the windowed peaks equal the full-window ones to 7e-5 (largest ratios
+0.95 % before, 6.8 % after; docs/performance.md). ``shell.window = "full"`` simulates every fin
+from t = 0 as before.
+
+Threads. After their operators are assembled (dolfinx, serial), the fins are independent: their
+compiled time loops (:func:`flexnet_fe.shell.kernel.advance`, ``nogil``) run in a thread pool of
+``shell.workers`` threads. Each fin's numbers do not depend on the thread count (no shared
+state; each kernel call is the serial code), so the results are those of one worker.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import threading
+from concurrent.futures import ThreadPoolExecutor
+from typing import Callable, NamedTuple, Sequence, TypeVar
+
+import numpy as np
+
+
+class FinWindow(NamedTuple):
+    """The simulated interval of one fin [s] and what it leaves out."""
+
+    load_start_s: float
+    """the last instant at which the fin's contact load is still zero [s]"""
+    end_s: float
+    """the end of the simulation [s]"""
+    accel_before_mps2: float = 0.0
+    """largest |body acceleration| at samples before load_start_s (left out) [m/s²]"""
+    accel_after_mps2: float = 0.0
+    """largest |body acceleration| at samples after end_s (left out) [m/s²]"""
+
+
+def fin_window(times: np.ndarray, samples: np.ndarray, end_time: float, end_margin: float,
+               accel_t: np.ndarray, accel: np.ndarray, *, fixed_end: bool) -> FinWindow:
+    """Window of a fin whose contact events are at the sample indices ``samples`` (ne,) of the
+    contact sample times ``times`` (nt,) [s]. ``end_time``: the stage's end [s] (the window never
+    goes beyond it); ``fixed_end``: the user gave ``shell.end_time`` (kept as the fin's end).
+    ``accel_t`` (na,) [s], ``accel`` (na, 3) [m/s²]: the body acceleration, to report what the
+    window leaves out before and after. A fin without events: the whole interval [0, end_time]."""
+    if not len(samples):
+        return FinWindow(0.0, end_time)
+    j0, j1 = int(samples.min()), int(samples.max())
+    start = float(times[j0 - 1]) if j0 > 0 else float(times[0])
+    last = float(times[min(j1 + 1, len(times) - 1)])
+    end = end_time if fixed_end else min(end_time, last + end_margin)
+    mag = np.linalg.norm(np.asarray(accel, float).reshape(-1, 3), axis=1)
+    return FinWindow(start, end, float(mag[accel_t < start].max(initial=0.0)),
+                     float(mag[accel_t > end].max(initial=0.0)))
+
+
+def window_steps(window: FinWindow, dt: float, every: int) -> tuple[int, int]:
+    """(start step, number of steps) of a window on the grid of a run from t = 0 with step
+    ``dt`` [s] and history rows every ``every`` steps: the start is a row at least one row
+    interval before ``load_start_s`` (so the load is zero there and at the first step), the end
+    the first row at or after ``end_s``."""
+    row = dt * every
+    start = every * max(0, math.floor(window.load_start_s / row) - 1)
+    end = every * max(1, math.ceil(window.end_s / row))
+    return start, max(end - start, every)
+
+
+def default_workers() -> int:
+    """Cores this process may run on."""
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (
+        os.cpu_count() or 1)
+
+
+J = TypeVar("J")
+R = TypeVar("R")
+
+
+def run_all(jobs: Sequence[J], fn: Callable[[J], R], workers: int) -> list[R]:
+    """[fn(job) for job in jobs], on ``workers`` threads (1: in this thread, in order). The
+    results come back in the order of ``jobs``; the first exception is raised after every job
+    has ended (the others keep their outputs)."""
+    if workers <= 1 or len(jobs) <= 1:
+        return [fn(j) for j in jobs]
+    with ThreadPoolExecutor(max_workers=min(workers, len(jobs)),
+                            thread_name_prefix="shell-fin") as pool:
+        futures = [pool.submit(fn, j) for j in jobs]
+        errors = [f.exception() for f in futures]
+    for err in errors:
+        if err is not None:
+            raise err
+    return [f.result() for f in futures]
+
+
+AFTER_RATIO_LIMIT = 0.5
+"""warn when the body acceleration after a fin's window loads it with more than this fraction
+of its largest contact force (a later, larger peak can then not be ruled out)"""
+
+IO_LOCK = threading.Lock()
+"""Held around every dolfinx/XDMF call and progress update made from a fin's thread (dolfinx
+and HDF5 are not made to be called from several threads at once)."""
