@@ -212,8 +212,10 @@ def shell_cost(case, file) -> StageCost:
     state and stress work vectors). Steps: dt ≈ safety × β h_min / c_p with c_p = √(E/(ρ(1−ν²))),
     h_min = the smaller of missile.mesh_size and shell.local_mesh_size (the refined zones set the
     step of the whole fin) and β = :data:`SHELL_STEP_FACTOR`; end time = collide duration + end_margin unless given. Disk: 8 stress and
-    displacement fields per output, 40 outputs per fin by default. Steps are per fin (the fins
-    are solved one after the other)."""
+    displacement fields per output, 40 outputs per fin by default. Steps are per fin, from t = 0 to
+    the end: an upper bound — before the collision no one knows each fin's load window
+    (``shell.window = "fin"`` simulates about half of it on radar_traction) or how many fins
+    share the ``shell.workers`` threads."""
     m, sh = case.missile, case.shell
     h = m.mesh_size
     h_min = min(h, sh.local_mesh_size or h)
