@@ -207,6 +207,8 @@ def _apply(model, state, wk, slot, fin, delta, s, dt):
     fmt[5] -= l0 * f1 - l1 * f0
     state.acc[A_DISS_CONTACT] += (fn - fel) * ddot * dt
     state.acc[A_DISS_FRICTION] -= (ft0 * vt0 + ft1 * vt1 + ft2 * vt2) * dt
+    state.part_imp[fin + 1, 0] += fn * dt
+    state.part_imp[fin + 1, 1] += np.sqrt(ft0 * ft0 + ft1 * ft1 + ft2 * ft2) * dt
     fmag = np.sqrt(f0 * f0 + f1 * f1 + f2 * f2)
     state.acc[A_FCONTACT] += fmag * dt
     if fin >= 0 and fmag > 0.0:  # (a contact in restitution may carry no force: F_n ≥ 0 clamp)

@@ -106,6 +106,10 @@ class CollideState(NamedTuple):
         fin_imp [N s] (ns·nf, 3) impulse on the fin in B; fin_pt [N s m] (ns·nf, 3) impulse-
         weighted contact point in B; fin_w [N s] (ns·nf,) Σ |impulse|; touched (ns·nf,) int64 the
         slots written in this call, ntouched (1,) int64 their count (``simulate`` reads and clears them).
+    part_imp [N s] (1 + nf, 2): per part (row 0 the body, 1 + fin), the whole run's Σ |F_n| dt
+        (normal-force magnitude, damping included) and Σ |F_t| dt (friction magnitude): scalar
+        sums, unlike the vector fin impulses — their ratio to the vector impulse shows how much
+        of the normal force cancels around an edge (docs/collide_convergence.md, fourth pass).
     acc (N_ACC,) accumulators (``A_*``).
     """
 
@@ -122,6 +126,7 @@ class CollideState(NamedTuple):
     fin_w: np.ndarray
     touched: np.ndarray
     ntouched: np.ndarray
+    part_imp: np.ndarray
     acc: np.ndarray
 
 
@@ -134,4 +139,4 @@ def new_state(x: np.ndarray, n_seg: int, n_fin: int, mx, mv, mq) -> CollideState
         mx=np.array(mx, dtype=np.float64), mv=np.array(mv, dtype=np.float64), mq=np.array(mq, dtype=np.float64),
         mh=np.zeros(3), vk=np.zeros(n_seg * (1 + n_fin)), fin_imp=np.zeros((n_fin_slots, 3)),
         fin_pt=np.zeros((n_fin_slots, 3)), fin_w=np.zeros(n_fin_slots), touched=np.zeros(n_fin_slots, np.int64),
-        ntouched=np.zeros(1, np.int64), acc=np.zeros(N_ACC))
+        ntouched=np.zeros(1, np.int64), part_imp=np.zeros((1 + n_fin, 2)), acc=np.zeros(N_ACC))

@@ -552,8 +552,20 @@ def _summary(rec: _Recorder, setup: Setup, loads: FinLoads, x_start, dt, steps, 
         "crop_boundary_motion_m": boundary_motion(x_start, st.x, setup.boundary),
         "warnings": warnings,
         "wall_s": wall,
+        **part_impulse_sums(st.part_imp, [f.name for f in missile.fins]),
     }
     return summary
+
+
+def part_impulse_sums(part_imp: np.ndarray, fin_names: list[str]) -> dict:
+    """Summary keys of the per-part scalar impulse sums (``CollideState.part_imp`` (1 + nf, 2)):
+    ``normal_impulse_sum_ns`` {part: Σ |F_n| dt} and ``friction_impulse_sum_ns`` {part: Σ |F_t| dt}
+    [N s], parts "body" then the fins. Unlike the (vector) impulses they do not cancel around an
+    edge: Σ |F_n| dt over |Σ F_n dt| measures how much of the normal force a rope wrapped over a
+    fin's edge spends against itself, and friction (Eq. (32)) acts on Σ |F_n|."""
+    names = ["body"] + list(fin_names)
+    return {"normal_impulse_sum_ns": {n: float(part_imp[i, 0]) for i, n in enumerate(names)},
+            "friction_impulse_sum_ns": {n: float(part_imp[i, 1]) for i, n in enumerate(names)}}
 
 
 def _fin_loads(missile, cfg, n_out, row_start, ev_rows, width) -> FinLoads:

@@ -129,6 +129,31 @@ def test_segment_swept_through_an_edge_at_500_mps_is_stopped(radar, scenes):
     assert st.acc[M.A_PEN_RATIO] < 1.0  # its centre line never reached the core
 
 
+def test_per_part_impulse_sums_against_momentum_and_coulomb(radar, scenes):
+    # References: (a) momentum — the 500 m/s tip-edge impact of the test above, μ = 0: the normal
+    # keeps its direction (+y_b, the segment crosses the fin plane square to the rounded tip edge),
+    # so wing_1's scalar sum Σ|F_n| dt is the segment's momentum change m_tot (v_in + v_out) to the
+    # same 1e-3; nothing is booked on the body or as friction. (b) Eq. (32) at full slip — the same
+    # impact while the segment slides at 400 m/s along the edge (x_b), μ = 0.2: friction takes at
+    # most μ × 2 m_tot × 500 ≈ 200 m/s of the slide, so |v_t| stays ≫ v_reg = 0.1 m/s and
+    # tanh(|v_t|/v_reg) = 1 in double precision: Σ|F_t| dt = μ Σ|F_n| dt to round-off (1e-12).
+    v, m = 500.0, 1.6e-3
+    kc = crossed_cylinders_stiffness(R, H, 1e11 / 0.91)
+    a = np.array([-2.0, TIP_Y + H + R + 1e-4, -0.025])
+    km, st = scenes.segment_scene(radar, a, a + [0, 0, 0.05], [0, -v, 0], [0, -v, 0], mass=m, k=318.0,
+                                  k_contact=kc, damping="lankarani_nikravesh")
+    assert run(km, st, 4e-9, 2e-5, chunk=50)[0] == M.OK
+    v_out = st.v[:, 1].mean()
+    assert st.part_imp[1, 0] == pytest.approx(2 * m * (v + v_out), rel=1e-3)  # row 1 + 0: wing_1
+    assert st.part_imp[0].sum() == 0.0 and st.part_imp[2:].sum() == 0.0 and st.part_imp[1, 1] == 0.0
+    km, st = scenes.segment_scene(radar, a, a + [0, 0, 0.05], [-400.0, -v, 0], [-400.0, -v, 0], mass=m, k=318.0,
+                                  k_contact=kc, damping="lankarani_nikravesh", mu=0.2)
+    assert run(km, st, 4e-9, 2e-5, chunk=50)[0] == M.OK
+    assert st.v[:, 0].mean() < -150.0  # still sliding when the contact ended
+    assert st.part_imp[1, 0] > 1.0
+    assert st.part_imp[1, 1] == pytest.approx(0.2 * st.part_imp[1, 0], rel=1e-12)
+
+
 def test_soft_contact_tunnels_and_stops_the_run(radar, scenes):
     # Reference: the tunnelling rule. With the paper's 1 MPa rope as its own transverse modulus
     # (K ≈ 6.7e4 N/m^1.5) the same segment's centre line reaches the fin core: the kernel stops
