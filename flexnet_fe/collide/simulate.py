@@ -207,12 +207,12 @@ def _balance(e: dict) -> float:
 
 
 def _take_fin_events(km: M.CollideModel, st: M.CollideState):
-    """(fin (k,), point [m] (k, 3) B, impulse [N s] (k, 3) B) of the fin-load slots written in
-    the last call; the slots are cleared."""
+    """(fin (k,), point [m] (k, 3) B, impulse [N s] (k, 3) B, segment (k,)) of the fin-load slots
+    written in the last call; the slots are cleared."""
     nt = int(st.ntouched[0])
     fs = st.touched[:nt].copy()
     nf = km.fin_half.shape[0]
-    out = (fs % nf, st.fin_pt[fs] / st.fin_w[fs, None], st.fin_imp[fs].copy())
+    out = (fs % nf, st.fin_pt[fs] / st.fin_w[fs, None], st.fin_imp[fs].copy(), fs // nf)
     st.fin_imp[fs] = 0.0
     st.fin_pt[fs] = 0.0
     st.fin_w[fs] = 0.0
@@ -314,6 +314,16 @@ def _air_summary(km: M.CollideModel, st: M.CollideState, cfg: CollideConfig, rat
             "air_impulse_ns": [float(x) for x in st.acc[M.A_IMP_AIR:M.A_IMP_AIR + 3]], "air_drag_step_ratio": ratio}
 
 
+def edge_resolution(piece_max: float, rope_radius: float, fin_half: np.ndarray) -> dict:
+    """Summary keys of the rope's resolution at the fin edges: ``fin_contact_piece_max_m`` the
+    longest rope piece [m] that pressed on a fin, ``edge_piece_limit_m`` = min over the fins of
+    (r + h/2)/3 [m] (rope radius r, fin half-thickness h/2 (nf,)): the piece length at which a
+    rope hitting a rounded fin edge at 500 m/s has its impulse within 2 % of converged
+    (benchmarks/collide_edge_lab.py, docs/collide_convergence.md — a measured rule, not a law)."""
+    limit = float((rope_radius + np.min(fin_half)) / 3.0) if len(fin_half) else None
+    return {"fin_contact_piece_max_m": float(piece_max), "edge_piece_limit_m": limit}
+
+
 def interaction_over(contacts_last: float, tail_along: float, net_front_along: float, clearance: float) -> bool:
     """The end rule of a collision: no (segment, part) contact in the last output interval and the
     missile's tail (along the flight path [m]) at least ``clearance`` [m] beyond the foremost free
@@ -344,6 +354,8 @@ class _Run:
     row_start: list
     ev_rows: list
     snaps: tuple
+    fin_piece_max: float = 0.0
+    """rest length [m] of the longest rope piece that pressed on a fin"""
 
 
 def _drive(d: _Drive, n_min: int, n_max: int, snap_at: set, log) -> _Run:
@@ -359,7 +371,9 @@ def _drive(d: _Drive, n_min: int, n_max: int, snap_at: set, log) -> _Run:
             t = k * cfg.output_interval
             if status != M.OK:
                 raise NumericalError(_stop_message(status, st, cfg, t, names, setup, d.dt))
-            fin, pt, imp = _take_fin_events(km, st)
+            fin, pt, imp, seg = _take_fin_events(km, st)
+            if seg.size:
+                run.fin_piece_max = max(run.fin_piece_max, float(km.rest[seg].max()))
             run.row_start.append(run.row_start[-1] + fin.size)
             if fin.size:
                 run.ev_rows.append((fin, pt, imp))
@@ -386,6 +400,15 @@ def _end_summary(summary: dict, run: _Run, rec: "_Recorder", cfg: CollideConfig,
     summary.update({"stop_reason": run.stop_reason, "end_time_s": float(c["t_s"][-1]), "force_at_end_n": force_end,
            "rope_split": int(cfg.rope_split), "rope_split_margin_m": float(cfg.rope_split_margin),
            "net_nodes": int(net.model.n_nodes), "net_segments": int(net.model.n_springs)})
+    summary.update(edge_resolution(run.fin_piece_max, net.rope.diameter / 2, rec.km.fin_half))
+    limit = summary["edge_piece_limit_m"]
+    if limit is not None and run.fin_piece_max > limit:
+        summary["warnings"].append(
+            f"collide: rope pieces up to {1e3 * run.fin_piece_max:.3g} mm long pressed on the fins, longer than "
+            f"(r + h/2)/3 = {1e3 * summary['edge_piece_limit_m']:.3g} mm: measured at 500 m/s, a rope on a fin's "
+            f"rounded edge needs pieces that short for its impulse to be within 2 % (at 50 m/s, 12.5 mm pieces were "
+            f"within 1.5 %; benchmarks/collide_edge_lab.py): Δv and the fin impulses may not be converged in "
+            f"the rope split (raise collide.rope_split)")
     if run.stop_reason != "interaction_over":
         what = (f"contact force {force_end:.4g} N still acting" if force_end > 0 else
                 f"no contact, but the missile's tail is not {cfg.end_clearance:g} m past the net")

@@ -111,6 +111,14 @@ def test_split_contact_scene_closes_energy_and_momentum(radar, log, scenes):
     assert s["fin_impulse_ns"]["wing_1"] > 0.0 and not s["tunnelling"]
     assert s["energy_error_rel"] < 5e-3 and s["momentum_error_rel"] < 1e-8
     assert 0.35 < s["energy_error_rel"] / runs[0].summary["energy_error_rel"] < 0.65
+    # The edge-resolution guard (docs/collide_convergence.md, fourth pass): the rope that pressed on
+    # wing_1 is a 0.1 m bar split in 4, so the longest piece on a fin is 0.1/4 of its rest length;
+    # the limit is (r + h/2)/3 with the radar's thinnest fin (rudders, h/2 = 2 mm) and r = 2.25 mm,
+    # and 25 mm pieces must be warned about.
+    bar = float(_fin_edge_scene(scenes).rest_length.max())
+    assert s["fin_contact_piece_max_m"] == pytest.approx(bar / 4, rel=1e-12)
+    assert s["edge_piece_limit_m"] == pytest.approx((2.25e-3 + 2.0e-3) / 3, rel=1e-12)
+    assert any("pressed on the fins" in w for w in s["warnings"])
 
 
 def test_end_rule():
