@@ -111,17 +111,29 @@ def test_rope_in_the_fin_body_corner_conserves_energy(radar, scenes):
     assert max(errs[0][1], errs[1][1]) < 5e-4
 
 
+TIP_V, TIP_M = 500.0, 1.6e-3  # approach speed [m/s] and node mass [kg] of the tip-edge impact
+
+
+def _tip_edge_impact(radar, scenes, slide=0.0, mu=0.0):
+    """A rope segment (two 1.6 g nodes) straddling wing_1's plane meets the tip edge at 500 m/s
+    (sliding at ``slide`` [m/s] along x_b), the cases' contact (E_t = 100 GPa, Eq. (30)), LN
+    damping, friction ``mu``; run for 20 µs. Returns (state, kernel status, per-call impulses)."""
+    kc = crossed_cylinders_stiffness(R, H, 1e11 / 0.91)
+    a = np.array([-2.0, TIP_Y + H + R + 1e-4, -0.025])
+    v0 = [slide, -TIP_V, 0]
+    km, st = scenes.segment_scene(radar, a, a + [0, 0, 0.05], v0, v0, mass=TIP_M, k=318.0, k_contact=kc,
+                                  damping="lankarani_nikravesh", mu=mu)
+    status, imp = run(km, st, 4e-9, 2e-5, chunk=50)
+    return st, status, imp
+
+
 def test_segment_swept_through_an_edge_at_500_mps_is_stopped(radar, scenes):
     # Reference: momentum and the kernel's tunnelling rule. A rope segment (two 1.6 g nodes)
     # straddling the fin plane meets the tip edge at 500 m/s. With the cases' contact (E_t =
     # 100 GPa, Eq. (30): K = 4/3 E/(1−ν²) sqrt(sqrt(r h/2))) it is stopped and thrown back: its
     # velocity reverses and the contact impulse is m_tot (v_in + v_out) to the step error.
-    v, m = 500.0, 1.6e-3
-    kc = crossed_cylinders_stiffness(R, H, 1e11 / 0.91)
-    a = np.array([-2.0, TIP_Y + H + R + 1e-4, -0.025])
-    km, st = scenes.segment_scene(radar, a, a + [0, 0, 0.05], [0, -v, 0], [0, -v, 0], mass=m, k=318.0,
-                                  k_contact=kc, damping="lankarani_nikravesh")
-    status, imp = run(km, st, 4e-9, 2e-5, chunk=50)
+    v, m = TIP_V, TIP_M
+    st, status, imp = _tip_edge_impact(radar, scenes)
     assert status == M.OK
     v_out = st.v[:, 1].mean()
     assert v_out > 0.0  # moving away from the fin again
@@ -137,18 +149,14 @@ def test_per_part_impulse_sums_against_momentum_and_coulomb(radar, scenes):
     # impact while the segment slides at 400 m/s along the edge (x_b), μ = 0.2: friction takes at
     # most μ × 2 m_tot × 500 ≈ 200 m/s of the slide, so |v_t| stays ≫ v_reg = 0.1 m/s and
     # tanh(|v_t|/v_reg) = 1 in double precision: Σ|F_t| dt = μ Σ|F_n| dt to round-off (1e-12).
-    v, m = 500.0, 1.6e-3
-    kc = crossed_cylinders_stiffness(R, H, 1e11 / 0.91)
-    a = np.array([-2.0, TIP_Y + H + R + 1e-4, -0.025])
-    km, st = scenes.segment_scene(radar, a, a + [0, 0, 0.05], [0, -v, 0], [0, -v, 0], mass=m, k=318.0,
-                                  k_contact=kc, damping="lankarani_nikravesh")
-    assert run(km, st, 4e-9, 2e-5, chunk=50)[0] == M.OK
+    v, m = TIP_V, TIP_M
+    st, status, _ = _tip_edge_impact(radar, scenes)
+    assert status == M.OK
     v_out = st.v[:, 1].mean()
     assert st.part_imp[1, 0] == pytest.approx(2 * m * (v + v_out), rel=1e-3)  # row 1 + 0: wing_1
     assert st.part_imp[0].sum() == 0.0 and st.part_imp[2:].sum() == 0.0 and st.part_imp[1, 1] == 0.0
-    km, st = scenes.segment_scene(radar, a, a + [0, 0, 0.05], [-400.0, -v, 0], [-400.0, -v, 0], mass=m, k=318.0,
-                                  k_contact=kc, damping="lankarani_nikravesh", mu=0.2)
-    assert run(km, st, 4e-9, 2e-5, chunk=50)[0] == M.OK
+    st, status, _ = _tip_edge_impact(radar, scenes, slide=-400.0, mu=0.2)
+    assert status == M.OK
     assert st.v[:, 0].mean() < -150.0  # still sliding when the contact ended
     assert st.part_imp[1, 0] > 1.0
     assert st.part_imp[1, 1] == pytest.approx(0.2 * st.part_imp[1, 0], rel=1e-12)
