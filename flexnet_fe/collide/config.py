@@ -84,6 +84,13 @@ class CollideConfig(Section):
     rope_split_margin: NonNegative = Field(0.2, description=(
         "distance beyond the missile's bounding radius around the flight path within which rope segments "
         "are split (rope_split) [m]"))
+    fin_piece_length: Positive | None = Field(None, description=(
+        "longest rope piece near the fins [m]: the part of every rope segment whose capsule passes within "
+        "fin_split_margin of a fin's strip (the fin's trace swept along the path) is cut into equal pieces no "
+        "longer than this, after rope_split (collide.refine; the edge rule (r + h/2)/3 of "
+        "benchmarks/collide_edge_lab.py is the summary's edge_piece_limit_m); None = no refinement at the fins"))
+    fin_split_margin: NonNegative = Field(0.05, description=(
+        "distance from a fin's strip within which rope is cut to fin_piece_length [m]"))
     allow_tunnelling: bool = Field(False, description=(
         "finish a run in which a rope centre line reaches a part's core (the rope passes through) and "
         "report the skipped impulse, instead of stopping"))

@@ -34,7 +34,7 @@ from flexnet_fe.collide import model as M
 from flexnet_fe.collide.config import CollideConfig
 from flexnet_fe.collide.crop import (active_segments, boundary_motion, boundary_nodes, crop_reach, free_nodes,
                                      wave_speed)
-from flexnet_fe.collide.refine import split_near_path
+from flexnet_fe.collide.refine import refine_near_fins, split_near_path
 from flexnet_fe.collide.metrics import FinContacts, MissileHistory, collision_metrics
 from flexnet_fe.collide.scene import HeldNet, MissileStart, fin_planes, place_missile
 from flexnet_fe.collide.timestep import StepChoice, choose_step, contact_stiffness
@@ -238,8 +238,8 @@ def simulate(net: HeldNet, missile: Missile, cfg: CollideConfig, gravity: float,
              n_snapshots: int | None = None, dt_scale: float = 1.0) -> CollisionResult:
     """Run the impact of ``missile`` on the held ``net`` per ``cfg`` (gravity g [m/s²] used only
     if ``cfg.gravity``; air_density ρ [kg/m³], the [atmosphere]'s, needed and used only if
-    ``cfg.air``). The rope near the path is first split per ``cfg.rope_split``
-    (``collide.refine``; the result's ``net`` is the split net). Keyword overrides (tests,
+    ``cfg.air``). The rope near the path is first split per ``cfg.rope_split``, then cut to
+    ``cfg.fin_piece_length`` near the fins (``collide.refine``; the result's ``net`` is the split net). Keyword overrides (tests,
     convergence studies): crop, n_snapshots, dt_scale (the chosen dt is multiplied by it).
 
     End rule: the run lasts at least ``cfg.duration``; from then on it stops at the first output
@@ -255,7 +255,7 @@ def simulate(net: HeldNet, missile: Missile, cfg: CollideConfig, gravity: float,
     if cfg.air and air_density is None:
         raise FlexnetError("collide: collide.air = true needs the air density of the [atmosphere] (simulate's "
                            "air_density)")
-    net = split_near_path(net, missile, cfg)
+    net = refine_near_fins(split_near_path(net, missile, cfg), missile, cfg)
     setup = build(net, missile, cfg, gravity, log, cfg.crop if crop is None else crop, air_density or 0.0)
     km, start, step = setup.model, setup.start, setup.step
     n_sub = max(1, math.ceil(cfg.output_interval / (step.dt * dt_scale)))
@@ -399,6 +399,7 @@ def _end_summary(summary: dict, run: _Run, rec: "_Recorder", cfg: CollideConfig,
     force_end = float(c["contact_force_mean_n"][-1])
     summary.update({"stop_reason": run.stop_reason, "end_time_s": float(c["t_s"][-1]), "force_at_end_n": force_end,
            "rope_split": int(cfg.rope_split), "rope_split_margin_m": float(cfg.rope_split_margin),
+           "fin_piece_length_m": cfg.fin_piece_length, "fin_split_margin_m": float(cfg.fin_split_margin),
            "net_nodes": int(net.model.n_nodes), "net_segments": int(net.model.n_springs)})
     summary.update(edge_resolution(run.fin_piece_max, net.rope.diameter / 2, rec.km.fin_half))
     limit = summary["edge_piece_limit_m"]
@@ -408,7 +409,7 @@ def _end_summary(summary: dict, run: _Run, rec: "_Recorder", cfg: CollideConfig,
             f"(r + h/2)/3 = {1e3 * summary['edge_piece_limit_m']:.3g} mm: measured at 500 m/s, a rope on a fin's "
             f"rounded edge needs pieces that short for its impulse to be within 2 % (at 50 m/s, 12.5 mm pieces were "
             f"within 1.5 %; benchmarks/collide_edge_lab.py): Δv and the fin impulses may not be converged in "
-            f"the rope split (raise collide.rope_split)")
+            f"the rope split (set collide.fin_piece_length to at most the limit, or raise fin_split_margin if it is set)")
     if run.stop_reason != "interaction_over":
         what = (f"contact force {force_end:.4g} N still acting" if force_end > 0 else
                 f"no contact, but the missile's tail is not {cfg.end_clearance:g} m past the net")

@@ -9,7 +9,8 @@ import pytest
 
 from flexnet_fe.cli import main
 from flexnet_fe.collide.config import CollideConfig
-from flexnet_fe.collide.refine import split_near_path, split_segments
+from flexnet_fe.collide.refine import (fin_strip_cuts, fin_strips, refine_near_fins, split_at, split_near_path,
+                                      split_segments, stadium_interval)
 from flexnet_fe.collide.simulate import interaction_over, simulate
 
 from .test_collide import _fin_edge_scene
@@ -80,6 +81,85 @@ def test_split_net_at_rest_stays_at_rest(scenes):
     n = net.model.n_nodes
     np.testing.assert_allclose(f1[:n], f0, rtol=0, atol=1e-12 * scale)
     assert np.abs(f1[n:]).max() < 1e-12 * scale
+
+
+def test_uneven_split_keeps_mass_centre_rope_and_dashpots(scenes):
+    # Reference: closed forms of the split's definition (collide.refine.split_at). Pieces of
+    # fractions f_j: rope mass f_j ρ A l0 half to each end, so mass and centre of mass are unchanged
+    # and a new node between pieces j, j+1 weighs (f_j + f_j+1) ρ A l0 / 2; rest lengths f_j l0
+    # add up to l0; springs EA/(f_j l0) and dashpots c/f_j in series give the segment's EA/l0 and c.
+    net = _stretched(scenes)
+    m = net.model
+    idx = np.array([3, 10, 17])
+    cuts = [np.array([0.1, 0.15, 0.7]), np.array([0.5]), np.array([0.02, 0.98])]
+    fine = split_at(net, idx, cuts)
+    fm = fine.model
+    assert fm.n_nodes == m.n_nodes + 6 and fm.n_springs == m.n_springs + 6
+    assert fm.mass.sum() == pytest.approx(m.mass.sum(), rel=1e-13)
+    np.testing.assert_allclose(fm.mass @ fine.x, m.mass @ net.x, rtol=1e-12, atol=1e-15)
+    rope = net.rope.density * 0.25 * np.pi * net.rope.diameter ** 2 * m.rest_length[idx[0]]
+    np.testing.assert_allclose(fm.mass[m.n_nodes:m.n_nodes + 3], rope * np.array([0.075, 0.3, 0.425]), rtol=1e-12)
+    a, b = net.x[m.springs[idx[0], 0]], net.x[m.springs[idx[0], 1]]
+    np.testing.assert_allclose(fine.x[m.n_nodes:m.n_nodes + 3], a + np.array([0.1, 0.15, 0.7])[:, None] * (b - a),
+                               rtol=0, atol=1e-15)
+    first = slice(m.n_springs - idx.size, m.n_springs - idx.size + 4)  # the four pieces of idx[0]
+    np.testing.assert_allclose(fine.rest_length[first], net.rest_length[idx[0]] * np.array([0.1, 0.05, 0.55, 0.3]),
+                               rtol=1e-12)
+    np.testing.assert_allclose(1.0 / (1.0 / fm.damping[first]).sum(), m.damping[idx[0]], rtol=1e-13)
+    np.testing.assert_allclose(1.0 / (1.0 / (fm.stiffness_ea / fm.rest_length)[first]).sum(), m.stiffness[idx[0]],
+                               rtol=1e-13)
+    # the uneven split of a taut net at rest is still at rest (every chord node feels equal tensions)
+    f1 = _nodal_rope_forces(fine)
+    assert np.abs(f1[m.n_nodes:]).max() < 1e-12 * np.abs(_nodal_rope_forces(net)).max()
+
+
+def test_stadium_interval_against_closed_forms():
+    # Reference: plane geometry. The stadium of the segment (0,0)–(1,0) with radius 0.1: a vertical
+    # line x = 0.5 from y = -1 to 1 (t = (y + 1)/2) is inside for |y| <= 0.1; a horizontal line
+    # y = 0.05 from x = -1 to 2 (t = (x + 1)/3) for x in [-sqrt(0.01 - 0.0025), 1 + sqrt(...)]; a
+    # line y = 0.2 misses; a degenerate point inside is "all t".
+    f0, f1 = np.array([0.0, 0.0]), np.array([1.0, 0.0])
+    a = np.array([[0.5, -1.0], [-1.0, 0.05], [-1.0, 0.2], [0.5, 0.0]])
+    u = np.array([[0.0, 2.0], [3.0, 0.0], [3.0, 0.0], [0.0, 0.0]])
+    lo, hi = stadium_interval(a, u, f0, f1, 0.1)
+    w = np.sqrt(0.01 - 0.0025)
+    np.testing.assert_allclose([lo[0], hi[0]], [0.45, 0.55], rtol=0, atol=1e-15)
+    np.testing.assert_allclose([lo[1], hi[1]], [(1.0 - w) / 3.0, (2.0 + w) / 3.0], rtol=0, atol=1e-15)
+    assert lo[2] > hi[2]
+    assert lo[3] == -np.inf and hi[3] == np.inf
+
+
+def test_refine_near_fins_cuts_only_where_a_fin_passes(radar, scenes):
+    # Reference: geometry of the fins' strips (their root-to-tip traces across the path). A flat
+    # 2 m net with 0.5 m bars (both ends of most bars far outside the missile's radius — the case
+    # the old both-ends rule left unsplit): every piece that lies within the margin of a strip is
+    # at most fin_piece_length long, pieces elsewhere keep their length, and a bar that passes no
+    # strip is untouched.
+    net = scenes.flat_net(2.0, 0.5)
+    cfg = CollideConfig(net_source="flat_taut", fin_piece_length=0.01, fin_split_margin=0.02)
+    assert refine_near_fins(net, radar, cfg.model_copy(update={"fin_piece_length": None})) is net
+    idx, cuts = fin_strip_cuts(net, radar, cfg)
+    assert idx.size > 0
+    fine = refine_near_fins(net, radar, cfg)
+    fm = fine.model
+    assert fm.mass.sum() == pytest.approx(net.model.mass.sum(), rel=1e-13)
+    n_old = net.model.n_springs - idx.size
+    p, q = fine.x[fm.springs[n_old:, 0]], fine.x[fm.springs[n_old:, 1]]
+    mid = 0.5 * (p + q)
+    length = np.linalg.norm(q - p, axis=1)
+    d_strip = np.full(mid.shape[0], np.inf)
+    for f0, f1, half in fin_strips(radar):  # B (y, z) = W (y, x) rotated: for incidence 0, roll 0
+        from flexnet_fe.collide.scene import missile_attitude
+
+        yz = (mid - np.array([*cfg.aim_point, 0.0])) @ missile_attitude(0.0, 0.0)[:, 1:]
+        e = (f1 - f0) / np.linalg.norm(f1 - f0)
+        s = np.clip((yz - f0) @ e, 0.0, np.linalg.norm(f1 - f0))
+        d_strip = np.minimum(d_strip, np.linalg.norm(yz - (f0 + s[:, None] * e), axis=1) - half)
+    near = d_strip < cfg.fin_split_margin - 0.01  # the piece's midpoint well inside the refined band
+    assert near.sum() > 10
+    assert length[near].max() <= cfg.fin_piece_length * (1 + 1e-9)
+    far_old = np.setdiff1d(np.arange(net.model.n_springs), idx)
+    np.testing.assert_array_equal(fm.springs[:n_old], net.model.springs[far_old])
 
 
 def test_split_near_path_selects_by_margin(radar, scenes):
