@@ -16,7 +16,8 @@ this order at collision start:
    needs pieces of about a third of that radius (benchmarks/collide_edge_lab.py), far finer than
    the body needs; cutting only where a fin passes costs a fraction of cutting the whole swept
    disk that fine, and it also reaches the long segments (rotary nets: up to 2.8 m) whose ends lie
-   far outside the path, which rule 1 leaves whole.
+   far outside the path, which rule 1 leaves whole. The strips start at the axis: rope the nose
+   meets inside the body radius is pushed out radially and meets the fins at their roots.
 
 How a segment is cut (:func:`split_at`, pieces of fractions f_j of the segment, Σ f_j = 1):
 
@@ -179,15 +180,17 @@ def stadium_interval(a: np.ndarray, u: np.ndarray, f0: np.ndarray, f1: np.ndarra
 
 
 def fin_strips(missile) -> list[tuple[np.ndarray, np.ndarray, float]]:
-    """Each fin's trace in the plane across the flight path: the path sweeps the fin's planform
-    (a plate in a plane through the missile axis) into a strip whose cross-section is the plane
-    segment from its root to its tip radius. Returns [(f0, f1 [m] (2,), half-thickness [m])] in
-    (y_b, z_b) coordinates."""
+    """Each fin's strip in the plane across the flight path: the path sweeps the fin's planform
+    (a plate in a plane through the missile axis) into a strip whose cross-section is a plane
+    segment along the fin's radial line, here taken from the AXIS to the tip radius — rope that
+    the nose meets inside the body radius is pushed out radially (its angle kept) and reaches the
+    fin's root there. Returns [(f0 = (0, 0), f1 = the tip's (y_b, z_b) [m] (2,), half-thickness
+    [m])]."""
     out = []
     for fin in missile.fins:
         yz = np.asarray(fin.corners)[:, 1:]
-        rad = np.hypot(yz[:, 0], yz[:, 1])
-        out.append((yz[int(np.argmin(rad))].copy(), yz[int(np.argmax(rad))].copy(), 0.5 * fin.thickness))
+        tip = yz[int(np.argmax(np.hypot(yz[:, 0], yz[:, 1])))]
+        out.append((np.zeros(2), tip.copy(), 0.5 * fin.thickness))
     return out
 
 
@@ -218,7 +221,7 @@ def fin_strip_cuts(net: HeldNet, missile, cfg) -> tuple[np.ndarray, list[np.ndar
     within that distance into equal pieces of at most ``cfg.fin_piece_length`` [m] (length: the
     larger of the held chord and the rest length). The test is on the held positions: rope that
     moves into a strip only during the impact is caught by the edge-resolution guard
-    (``metrics.edge_resolution``)."""
+    (``simulate.edge_resolution``)."""
     rot = missile_attitude(cfg.incidence_angle, cfg.roll_angle)
     aim = np.array([cfg.aim_point[0], cfg.aim_point[1], 0.0])
     m = net.model

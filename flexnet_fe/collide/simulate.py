@@ -314,14 +314,22 @@ def _air_summary(km: M.CollideModel, st: M.CollideState, cfg: CollideConfig, rat
             "air_impulse_ns": [float(x) for x in st.acc[M.A_IMP_AIR:M.A_IMP_AIR + 3]], "air_drag_step_ratio": ratio}
 
 
-def edge_resolution(piece_max: float, rope_radius: float, fin_half: np.ndarray) -> dict:
+def edge_piece_limit(rope_radius: float, fin_half: np.ndarray) -> float | None:
+    """min over the fins of (r + h/2)/3 [m] (rope radius r, fin half-thickness h/2 (nf,)): the
+    piece length at which a rope hitting a rounded fin edge at 500 m/s has its impulse within 2 %
+    of converged (benchmarks/collide_edge_lab.py, docs/collide_convergence.md — a measured rule,
+    not a law); None without fins."""
+    return float((rope_radius + np.min(fin_half)) / 3.0) if len(fin_half) else None
+
+
+def edge_resolution(piece_max: float, rope_radius: float, fin_half: np.ndarray, imp_long: float = 0.0,
+                    imp_all: float = 0.0) -> dict:
     """Summary keys of the rope's resolution at the fin edges: ``fin_contact_piece_max_m`` the
-    longest rope piece [m] that pressed on a fin, ``edge_piece_limit_m`` = min over the fins of
-    (r + h/2)/3 [m] (rope radius r, fin half-thickness h/2 (nf,)): the piece length at which a
-    rope hitting a rounded fin edge at 500 m/s has its impulse within 2 % of converged
-    (benchmarks/collide_edge_lab.py, docs/collide_convergence.md — a measured rule, not a law)."""
-    limit = float((rope_radius + np.min(fin_half)) / 3.0) if len(fin_half) else None
-    return {"fin_contact_piece_max_m": float(piece_max), "edge_piece_limit_m": limit}
+    longest rope piece [m] that pressed on a fin, ``edge_piece_limit_m`` (:func:`edge_piece_limit`),
+    and ``fin_impulse_share_long_pieces`` = imp_long / imp_all, the share of the fins' Σ |impulse|
+    [N s] that pieces longer than the limit delivered (0 when no fin was loaded)."""
+    return {"fin_contact_piece_max_m": float(piece_max), "edge_piece_limit_m": edge_piece_limit(rope_radius, fin_half),
+            "fin_impulse_share_long_pieces": float(imp_long / imp_all) if imp_all > 0.0 else 0.0}
 
 
 def interaction_over(contacts_last: float, tail_along: float, net_front_along: float, clearance: float) -> bool:
@@ -356,11 +364,16 @@ class _Run:
     snaps: tuple
     fin_piece_max: float = 0.0
     """rest length [m] of the longest rope piece that pressed on a fin"""
+    fin_imp_long: float = 0.0
+    """Σ |impulse| [N s] on the fins from pieces longer than the edge limit"""
+    fin_imp_all: float = 0.0
+    """Σ |impulse| [N s] on the fins"""
 
 
 def _drive(d: _Drive, n_min: int, n_max: int, snap_at: set, log) -> _Run:
     """Advance the kernel interval by interval from 1 to at most ``n_max`` (end rule: ``simulate``)."""
     st, setup, cfg, km = d.st, d.setup, d.cfg, d.setup.model
+    limit = edge_piece_limit(km.rope_radius, km.fin_half) or np.inf
     x_full = np.array(d.net.x, dtype=np.float64)
     snaps = ([0.0], [x_full.copy()], [setup.start.apex.copy()], [st.mq.copy()])
     run = _Run(0, "max_duration" if cfg.max_duration is not None else "duration", [0], [], snaps)
@@ -374,6 +387,9 @@ def _drive(d: _Drive, n_min: int, n_max: int, snap_at: set, log) -> _Run:
             fin, pt, imp, seg = _take_fin_events(km, st)
             if seg.size:
                 run.fin_piece_max = max(run.fin_piece_max, float(km.rest[seg].max()))
+                mag = np.linalg.norm(imp, axis=1)
+                run.fin_imp_all += float(mag.sum())
+                run.fin_imp_long += float(mag[km.rest[seg] > limit].sum())
             run.row_start.append(run.row_start[-1] + fin.size)
             if fin.size:
                 run.ev_rows.append((fin, pt, imp))
@@ -401,11 +417,13 @@ def _end_summary(summary: dict, run: _Run, rec: "_Recorder", cfg: CollideConfig,
            "rope_split": int(cfg.rope_split), "rope_split_margin_m": float(cfg.rope_split_margin),
            "fin_piece_length_m": cfg.fin_piece_length, "fin_split_margin_m": float(cfg.fin_split_margin),
            "net_nodes": int(net.model.n_nodes), "net_segments": int(net.model.n_springs)})
-    summary.update(edge_resolution(run.fin_piece_max, net.rope.diameter / 2, rec.km.fin_half))
+    summary.update(edge_resolution(run.fin_piece_max, net.rope.diameter / 2, rec.km.fin_half, run.fin_imp_long,
+                                   run.fin_imp_all))
     limit = summary["edge_piece_limit_m"]
     if limit is not None and run.fin_piece_max > limit:
         summary["warnings"].append(
-            f"collide: rope pieces up to {1e3 * run.fin_piece_max:.3g} mm long pressed on the fins, longer than "
+            f"collide: rope pieces up to {1e3 * run.fin_piece_max:.3g} mm long pressed on the fins (they delivered "
+            f"{100 * summary['fin_impulse_share_long_pieces']:.3g} % of the fins' Σ|impulse|), longer than "
             f"(r + h/2)/3 = {1e3 * summary['edge_piece_limit_m']:.3g} mm: measured at 500 m/s, a rope on a fin's "
             f"rounded edge needs pieces that short for its impulse to be within 2 % (at 50 m/s, 12.5 mm pieces were "
             f"within 1.5 %; benchmarks/collide_edge_lab.py): Δv and the fin impulses may not be converged in "

@@ -199,6 +199,23 @@ def test_split_contact_scene_closes_energy_and_momentum(radar, log, scenes):
     assert s["fin_contact_piece_max_m"] == pytest.approx(bar / 4, rel=1e-12)
     assert s["edge_piece_limit_m"] == pytest.approx((2.25e-3 + 2.0e-3) / 3, rel=1e-12)
     assert any("pressed on the fins" in w for w in s["warnings"])
+    assert s["fin_impulse_share_long_pieces"] == 1.0  # every piece on wing_1 is 25 mm long
+
+
+def test_fin_refinement_satisfies_the_edge_guard(radar, log, scenes):
+    # Reference: the edge-resolution rule (docs/collide_convergence.md). The fin-edge scene's two
+    # 0.1 m ropes cross wing_1's strip; cut to fin_piece_length = the limit (r + h/2)/3 there, every
+    # piece that presses on wing_1 is within the limit: no fin impulse from longer pieces, no
+    # warning; momentum closes to round-off and the energy balance within ENERGY_TOLERANCE (0.5 %).
+    limit = (2.25e-3 + 2.0e-3) / 3
+    cfg = CollideConfig(net_source="flat_taut", duration=4.5e-3, crop=False, fin_piece_length=limit,
+                        fin_split_margin=0.01)
+    s = simulate(_fin_edge_scene(scenes), radar, cfg, 9.81, log).summary
+    assert s["fin_impulse_ns"]["wing_1"] > 0.0 and not s["tunnelling"]
+    assert 0.0 < s["fin_contact_piece_max_m"] <= limit * (1 + 1e-12)
+    assert s["fin_impulse_share_long_pieces"] == 0.0
+    assert not any("pressed on the fins" in w for w in s["warnings"])
+    assert s["energy_error_rel"] < 5e-3 and s["momentum_error_rel"] < 1e-8
 
 
 def test_end_rule():
