@@ -194,11 +194,11 @@ def fin_strips(missile) -> list[tuple[np.ndarray, np.ndarray, float]]:
     return out
 
 
-def _merge(intervals: list[tuple[float, float]]) -> list[tuple[float, float]]:
-    """Sorted, overlapping intervals merged."""
+def _merge(intervals: list[tuple[float, float]], gap: float = 0.0) -> list[tuple[float, float]]:
+    """Sorted intervals, those less than ``gap`` apart merged."""
     out: list[list[float]] = []
     for lo, hi in sorted(intervals):
-        if out and lo <= out[-1][1]:
+        if out and lo <= out[-1][1] + gap:
             out[-1][1] = max(out[-1][1], hi)
         else:
             out.append([lo, hi])
@@ -208,8 +208,17 @@ def _merge(intervals: list[tuple[float, float]]) -> list[tuple[float, float]]:
 def _cuts_in(intervals: list[tuple[float, float]], length: float, piece: float) -> np.ndarray:
     """Interior cut fractions of a segment of ``length`` [m] that divide each interval (fractions
     of the segment) into equal pieces no longer than ``piece`` [m] (interval ends included as
-    cuts, 0 and 1 excluded)."""
-    cuts = [np.linspace(lo, hi, max(1, math.ceil((hi - lo) * length / piece)) + 1) for lo, hi in intervals]
+    cuts, 0 and 1 excluded). No piece is made shorter than half of ``piece`` only because an
+    interval was short or near an end or another interval: intervals are first grown to at least
+    ``piece``, snapped to a segment end less than ``piece`` away and merged across gaps shorter
+    than ``piece`` (a light node would shorten the collision's time step, ``collide.timestep``)."""
+    h = piece / length
+    grown = []
+    for lo, hi in intervals:
+        pad = max(0.0, 0.5 * (h - (hi - lo)))
+        lo, hi = lo - pad, hi + pad
+        grown.append((0.0 if lo < h else lo, 1.0 if hi > 1.0 - h else hi))
+    cuts = [np.linspace(lo, hi, max(1, math.ceil((hi - lo) / h)) + 1) for lo, hi in _merge(grown, h)]
     c = np.unique(np.concatenate(cuts))
     return c[(c > 1e-12) & (c < 1.0 - 1e-12)]
 
