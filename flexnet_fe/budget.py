@@ -155,7 +155,10 @@ def collide_cost(case, file) -> StageCost:
     """Steps: the stage's own step rule (``collide.timestep.choose_step``: rope springs, contact,
     travel per step) evaluated at the lightest node the missile can reach before the run knows the
     held net: with ``rope_split`` k > 1 a node between two pieces of rest length l0/k (mass ρA l0/k,
-    the split's re-lumping, ``collide/refine.py``), else an interior knot (2ρA l0); the most
+    the split's re-lumping, ``collide/refine.py``), with ``fin_piece_length`` p shorter than that a
+    node between two pieces of length p (the cut at the fins makes pieces of p/2 … p, and the
+    held net's rest lengths are shorter than its chords: the estimate may be up to ≈ 2^0.4 × too
+    few steps there), else an interior knot (2ρA l0); the most
     segments at a node 4 (a rotary net's hub: its warps). Memory: the process, the held net and
     its work arrays (≈ 100 floats per node and per segment, as deploy; not measured separately)
     and ≈ 40 history columns per output row; disk: snapshots (60 B per node) × snapshots."""
@@ -172,7 +175,7 @@ def collide_cost(case, file) -> StageCost:
                       "memory": _mem_driver(100 * F8 * (nodes + segs), 40 * F8 * rows, "net.mesh_size",
                                             "collide.output_interval"), "disk": "collide.output_interval"})
     cost.detail = (f"{rows:.3g} history rows = collide.duration / collide.output_interval, "
-                   f"dt ≈ {dt:.3g} s (collide step rule, rope_split {cc.rope_split})")
+                   f"dt ≈ {dt:.3g} s (collide step rule, rope_split {cc.rope_split}, fin_piece_length {cc.fin_piece_length})")
     return cost
 
 
@@ -188,7 +191,9 @@ def _collide_step(case, l0: float) -> float:
     k = int(cc.rope_split)
     mu = rope.density * float(rope_area(rope.diameter))  # rope mass per length [kg/m]
     piece = l0 / k
-    m_min = mu * piece if k > 1 else 2.0 * mu * l0
+    if cc.fin_piece_length is not None and cc.fin_piece_length < piece:
+        piece = float(cc.fin_piece_length)
+    m_min = mu * piece if piece < l0 else 2.0 * mu * l0
     n_seg = 4 if net.kind == "traction" else max(4, int(net.warps))
     fin_half = 0.5 * min(m.wings.thickness, m.rudders.thickness)
     k_body, k_fin = contact_stiffness(cc, rope.radius, rope.transverse_modulus, rope.poisson_ratio, fin_half,
