@@ -149,13 +149,33 @@ def fin_outline_from_msh(path: Path) -> tuple[np.ndarray, float]:
     return np.array(corners), float(np.median(edge))
 
 
+REFINED_SCHEMES: dict[str, dict[str, float]] = {
+    "blossom": {"Mesh.Algorithm": 6, "Mesh.RecombinationAlgorithm": 1},
+    "full_quad": {"Mesh.Algorithm": 6, "Mesh.RecombinationAlgorithm": 3},
+}
+"""Gmsh recombination of the refined fin mesh (:func:`write_refined_fin_mesh`). Both mesh the
+size field with frontal-Delaunay triangles (``Mesh.Algorithm`` 6). ``blossom`` (default since
+issue 10) pairs the triangles into quadrilaterals by a minimum-cost perfect matching (Gmsh makes
+every boundary curve's segment count even for it, so the matching leaves no triangle);
+``full_quad`` (the earlier default) meshes at twice the size, recombines, and splits every quad
+into 4 and every left-over triangle into 3 quadrilaterals — the median element is the requested
+size as well, but each split triangle leaves kite-shaped quads with two edges of ≈ 0.58 of it,
+which set the explicit step. Measured on the radar × traction fins at 1.25 mm (docs/performance.md,
+"Fin mesh quality and the shell step"): median edge in the refined zone 1.19–1.23 mm both,
+c_p·dt_crit 0.82–0.90 mm (blossom) against 0.67–0.70 mm (full_quad)."""
+
+
 def write_refined_fin_mesh(corners: np.ndarray, mesh_size: float, points: np.ndarray,
-                           fine_size: float, radius: float, path: Path) -> Path:
+                           fine_size: float, radius: float, path: Path, *,
+                           scheme: str = "blossom") -> Path:
     """An all-quadrilateral fin mesh refined around ``points`` (m, 3) [m] (contact points):
     element size ``fine_size`` within ``radius`` [m] of a point, growing linearly to
     ``mesh_size`` over the next 2 × mesh_size (Gmsh Distance + Threshold size fields, frontal
-    Delaunay triangles recombined into quads by the full-quad Blossom algorithm). Corners (4, 3)
-    and physical groups as :func:`build_fin_model`. Written to ``path`` (msh 4.1)."""
+    Delaunay triangles recombined into quads as :data:`REFINED_SCHEMES` ``[scheme]`` says).
+    Corners (4, 3) and physical groups as :func:`build_fin_model`. Written to ``path``
+    (msh 4.1). Raises RuntimeError if Gmsh leaves a non-quadrilateral element."""
+    if scheme not in REFINED_SCHEMES:
+        raise ValueError(f"scheme must be one of {sorted(REFINED_SCHEMES)}, got {scheme!r}")
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     corners = np.asarray(corners, float)
@@ -188,8 +208,8 @@ def write_refined_fin_mesh(corners: np.ndarray, mesh_size: float, points: np.nda
             f.setAsBackgroundMesh(th)
             size = fine_size
         opts = {"Mesh.MeshSizeExtendFromBoundary": 0, "Mesh.MeshSizeFromPoints": 0,
-                "Mesh.MeshSizeFromCurvature": 0, "Mesh.Algorithm": 6, "Mesh.RecombineAll": 1,
-                "Mesh.RecombinationAlgorithm": 3, "Mesh.Smoothing": 10,
+                "Mesh.MeshSizeFromCurvature": 0, "Mesh.RecombineAll": 1,
+                **REFINED_SCHEMES[scheme], "Mesh.Smoothing": 10,
                 "Mesh.MeshSizeMin": 0.5 * size, "Mesh.MeshSizeMax": mesh_size,
                 "Mesh.MshFileVersion": 4.1}
         saved = {k: gmsh.option.getNumber(k) for k in opts}
