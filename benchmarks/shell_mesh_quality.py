@@ -12,12 +12,13 @@ Mesh table (cheap, every fin of the run): the fin re-meshed exactly as the shell
     step sees: c_p dt_crit = h on a square mesh of side h, measured here on a 40 × 40 plate),
     DOF-steps per simulated ms at dt = safety_factor × dt_crit (the stage's cost measure).
 
-Accuracy table (``--solve wing_1,rudder_2``): the shell stage on those fins, each in its own
-window (``shell.window = "fin"``, as the case), with each scheme: peak von Mises (the structural
-peak of the report), its ZZ error estimate, steps, DOFs, DOF-steps and wall time.
+Accuracy table (``--solve wing_1,rudder_2``, optionally at other ``--solve-sizes``): the shell
+stage on those fins, each in its own window (``shell.window = "fin"``, as the case), with each
+scheme (``shell.local_mesh_scheme``): peak von Mises (the structural peak of the report), its ZZ
+error estimate, steps, DOFs, DOF-steps and wall time.
 
     PYTHONPATH=$PWD .venv/bin/python benchmarks/shell_mesh_quality.py /tmp/lead4_def \\
-        --solve wing_1,rudder_2 --json /tmp/mesh_quality.json
+        --solve wing_1,rudder_2 --solve-sizes 0.0025,0.00125 --json /tmp/mesh_quality.json
 """
 
 from __future__ import annotations
@@ -29,7 +30,6 @@ import sys
 import tempfile
 import time
 from pathlib import Path
-from unittest import mock
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -37,7 +37,6 @@ from scipy.spatial import cKDTree
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_shell import _run_stage  # noqa: E402
 
-from flexnet_fe.missile import mesh as missile_mesh  # noqa: E402
 from flexnet_fe.missile.build import build_missile  # noqa: E402
 from flexnet_fe.missile.config import MissileConfig  # noqa: E402
 from flexnet_fe.missile.mesh import (REFINED_SCHEMES, fin_outline_from_msh,  # noqa: E402
@@ -129,35 +128,39 @@ def _fmt_mesh(r: dict) -> str:
             f" mm), {r['dof_steps_per_ms']:.3e} DOF-steps/ms, mesh {r['mesh_s']:.1f} s")
 
 
-def solve_rows(run_dir: Path, fins: list[str], schemes: list[str]) -> list[dict]:
-    """The shell stage on each fin alone (its own window, as the case) with each scheme."""
+def solve_rows(run_dir: Path, fins: list[str], schemes: list[str],
+               sizes: list[float | None]) -> list[dict]:
+    """The shell stage on each fin alone (its own window, as the case) with each scheme, at each
+    ``local_mesh_size`` of ``sizes`` (None: the case's)."""
     case = json.loads((run_dir / "resolved.json").read_text())["case"]
     rows = []
-    original = missile_mesh.write_refined_fin_mesh
     for name in fins:
-        for scheme in schemes:
-            def patched(*a, _s=scheme, **k):
-                return original(*a, scheme=_s, **k)
-            with tempfile.TemporaryDirectory() as td, \
-                    mock.patch.object(missile_mesh, "write_refined_fin_mesh", patched):
-                t0 = time.perf_counter()
-                s = _run_stage(run_dir, case["missile"]["mesh_size"], [name], Path(td), None,
-                               {"workers": 1})
-                wall = time.perf_counter() - t0
-            f = s[name]
-            rows.append(dict(fin=name, scheme=scheme, peak_von_mises_pa=f["peak_von_mises_pa"],
-                             peak_time_s=f["peak_time_s"],
-                             peak_error_estimate_rel=f["peak_error_estimate_rel"],
-                             dofs=f["dofs"], steps=f["steps"], dt_s=f["dt_s"],
-                             dof_steps=f["dofs"] * f["steps"], h_min_m=f["h_min_m"],
-                             loops_wall_s=s["loops_wall_s"], wall_s=wall))
-            r = rows[-1]
-            print(f"{name:9s} {scheme:9s} peak {r['peak_von_mises_pa'] / 1e6:.1f} MPa at "
-                  f"{r['peak_time_s'] * 1e3:.4f} ms (ZZ {100 * r['peak_error_estimate_rel']:.2f} "
-                  f"%), {r['dofs']} DOFs x {r['steps']} steps = {r['dof_steps']:.3e} DOF-steps "
-                  f"(dt {r['dt_s']:.4e} s), loops {r['loops_wall_s']:.1f} s, stage "
-                  f"{r['wall_s']:.1f} s", flush=True)
+        for size in sizes:
+            for scheme in schemes:
+                rows.append(_solve_one(run_dir, case, name, scheme, size))
     return rows
+
+
+def _solve_one(run_dir: Path, case: dict, name: str, scheme: str, size: float | None) -> dict:
+    shell_set = {"workers": 1, "local_mesh_scheme": scheme}
+    if size is not None:
+        shell_set["local_mesh_size"] = size
+    with tempfile.TemporaryDirectory() as td:
+        t0 = time.perf_counter()
+        s = _run_stage(run_dir, case["missile"]["mesh_size"], [name], Path(td), None, shell_set)
+        wall = time.perf_counter() - t0
+    f = s[name]
+    r = dict(fin=name, scheme=scheme, local_mesh_size_m=f["local_mesh_size_m"],
+             peak_von_mises_pa=f["peak_von_mises_pa"],
+             peak_time_s=f["peak_time_s"], peak_error_estimate_rel=f["peak_error_estimate_rel"],
+             dofs=f["dofs"], steps=f["steps"], dt_s=f["dt_s"], dof_steps=f["dofs"] * f["steps"],
+             h_min_m=f["h_min_m"], loops_wall_s=s["loops_wall_s"], wall_s=wall)
+    print(f"{name:9s} {scheme:9s} {1e3 * r['local_mesh_size_m']:.4g} mm: peak "
+          f"{r['peak_von_mises_pa'] / 1e6:.1f} MPa at {r['peak_time_s'] * 1e3:.4f} ms (ZZ "
+          f"{100 * r['peak_error_estimate_rel']:.2f} %), {r['dofs']} DOFs x {r['steps']} steps = "
+          f"{r['dof_steps']:.3e} DOF-steps (dt {r['dt_s']:.4e} s), loops "
+          f"{r['loops_wall_s']:.1f} s, stage {r['wall_s']:.1f} s", flush=True)
+    return r
 
 
 def main(argv=None) -> None:
@@ -166,6 +169,8 @@ def main(argv=None) -> None:
     ap.add_argument("--fins", default="", help="mesh table fins (default: every loaded fin)")
     ap.add_argument("--schemes", default=",".join(REFINED_SCHEMES))
     ap.add_argument("--solve", default="", help="fins to run the shell stage on, per scheme")
+    ap.add_argument("--solve-sizes", default="",
+                    help="local_mesh_size values [m] for --solve (default: the case's)")
     ap.add_argument("--json", default="")
     a = ap.parse_args(argv)
     run_dir = Path(a.run_dir)
@@ -182,7 +187,8 @@ def main(argv=None) -> None:
               f"{out['square_cp_dt_over_h']:.3f}", flush=True)
         out["mesh"] = mesh_rows(run_dir, fins, schemes, Path(td))
     if a.solve:
-        out["solve"] = solve_rows(run_dir, a.solve.split(","), schemes)
+        sizes = [float(x) for x in a.solve_sizes.split(",")] if a.solve_sizes else [None]
+        out["solve"] = solve_rows(run_dir, a.solve.split(","), schemes, sizes)
     if a.json:
         Path(a.json).write_text(json.dumps(out, indent=1))
 
