@@ -67,7 +67,35 @@ def lanczos_dt(path: Path, mat: ShellMaterial, lanczos_steps: int) -> tuple[floa
     return critical_step(lam), model.V.dofmap.index_map.size_global * NDOF_NODE
 
 
-def mesh_rows(run_dir: Path, fins: list[str], schemes: list[str], work: Path) -> list[dict]:
+def limiting_node(path: Path, mat: ShellMaterial) -> dict:
+    """Where the step is set: the largest eigenpair of M^-1/2 K M^-1/2 (scipy ``eigsh``, serial)
+    — its node of largest amplitude, the DOF kind (0-2 translations, 3-4 rotations), the share
+    of the mode's squared amplitude on that node and on the four largest, the node's position
+    [m] and the edges [m] of the cells around it."""
+    from scipy import sparse
+    from scipy.sparse.linalg import eigsh
+
+    model = build_model(load_fin_mesh(path), mat, "auto")
+    ai, aj, av = model.op.K.convert("aij").getValuesCSR()
+    d = sparse.diags(np.sqrt(model.op.minv))
+    lam, vec = eigsh(d @ sparse.csr_matrix((av, aj, ai)) @ d, k=1, which="LA")
+    amp = vec[:, 0].reshape(-1, NDOF_NODE) ** 2
+    per_node = amp.sum(axis=1)
+    order = np.argsort(per_node)[::-1]
+    node = int(order[0])
+    x = model.V.tabulate_dof_coordinates()
+    cells = model.V.dofmap.list.array.reshape(-1, 4)[:, [0, 1, 3, 2]]  # dolfinx → cyclic
+    around = cells[(cells == node).any(axis=1)]
+    edges, _, _ = quad_measures(x, around)
+    return dict(cp_dt_crit_m=math.sqrt(mat.plane_stress_modulus / mat.density) * 2.0
+                / math.sqrt(lam[0]), node_m=x[node].tolist(), dof=int(np.argmax(amp[node])),
+                share_1=float(per_node[node] / per_node.sum()),
+                share_4=float(per_node[order[:4]].sum() / per_node.sum()),
+                cells_around=len(around), edges_around_m=edges.round(6).tolist())
+
+
+def mesh_rows(run_dir: Path, fins: list[str], schemes: list[str], work: Path,
+              where: bool = False) -> list[dict]:
     """One row per (fin, scheme): refined-zone edge statistics, h_min, DOFs, dt_crit, cost."""
     case = json.loads((run_dir / "resolved.json").read_text())["case"]
     shell = ShellConfig.model_validate(case.get("shell") or {})
@@ -108,6 +136,9 @@ def mesh_rows(run_dir: Path, fins: list[str], schemes: list[str], work: Path) ->
                              dofs=dofs, dt_crit_s=dt_crit, cp_dt_crit_m=c_p * dt_crit,
                              dof_steps_per_ms=dofs * 1e-3 / dt, mesh_s=t_mesh))
             print(_fmt_mesh(rows[-1]), flush=True)
+            if where:
+                rows[-1]["limiting"] = limiting_node(path, mat)
+                print("    step set at", rows[-1]["limiting"], flush=True)
     return rows
 
 
@@ -171,6 +202,8 @@ def main(argv=None) -> None:
     ap.add_argument("--solve", default="", help="fins to run the shell stage on, per scheme")
     ap.add_argument("--solve-sizes", default="",
                     help="local_mesh_size values [m] for --solve (default: the case's)")
+    ap.add_argument("--where", action="store_true",
+                    help="also locate each mesh's limiting mode (scipy eigsh; slower)")
     ap.add_argument("--json", default="")
     a = ap.parse_args(argv)
     run_dir = Path(a.run_dir)
@@ -185,7 +218,7 @@ def main(argv=None) -> None:
         out["square_cp_dt_over_h"] = square_reference(mat, 1.25e-3, 40, Path(td))
         print(f"structured square cells (40 x 40, 1.25 mm): c_p dt_crit / h = "
               f"{out['square_cp_dt_over_h']:.3f}", flush=True)
-        out["mesh"] = mesh_rows(run_dir, fins, schemes, Path(td))
+        out["mesh"] = mesh_rows(run_dir, fins, schemes, Path(td), a.where)
     if a.solve:
         sizes = [float(x) for x in a.solve_sizes.split(",")] if a.solve_sizes else [None]
         out["solve"] = solve_rows(run_dir, a.solve.split(","), schemes, sizes)
