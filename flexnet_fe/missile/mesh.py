@@ -11,7 +11,8 @@ size h_e = ``cfg.mesh_size``. Physical groups (names and fixed tags in :data:`PH
 Body mesh (pictures only, triangles): the body profile revolved about the x_b axis; physical
 surfaces ``nose``, ``body`` (cylinder), ``base``.
 
-Gmsh 4.8.4 (Debian) crashes with ``Mesh.Algorithm = 8``; it is not used here. dolfinx 0.5.2's
+Gmsh 4.8.4 (Debian) crashes with ``Mesh.Algorithm = 8`` (re-checked for issue 10: a segmentation
+fault on a refined fin with the Threshold size field); it is not used here. dolfinx 0.5.2's
 ``gmshio.read_from_msh`` is broken (undefined names), so ``flexnet_fe.shell.meshio.load_fin_mesh`` opens the file with
 gmsh on rank 0 and calls ``gmshio.model_to_mesh(..., gdim=3)`` itself. gmsh is initialised once per
 process and never finalised here (see :func:`gmsh_model`).
@@ -149,13 +150,39 @@ def fin_outline_from_msh(path: Path) -> tuple[np.ndarray, float]:
     return np.array(corners), float(np.median(edge))
 
 
+REFINED_SCHEMES: dict[str, dict[str, float]] = {
+    "blossom": {"Mesh.Algorithm": 6, "Mesh.RecombinationAlgorithm": 1},
+    "full_quad": {"Mesh.Algorithm": 6, "Mesh.RecombinationAlgorithm": 3},
+}
+"""Gmsh recombination of the refined fin mesh (:func:`write_refined_fin_mesh`). Both mesh the
+size field with frontal-Delaunay triangles (``Mesh.Algorithm`` 6). ``blossom`` pairs the
+triangles into quadrilaterals by a minimum-cost perfect matching (Gmsh makes every boundary
+curve's segment count even for it, as a perfect matching needs; a left-over triangle would
+raise — none on the eight paper fins nor the tests' contact set);
+``full_quad`` (the default) meshes at twice the size, recombines, and splits every quad
+into 4 and every left-over triangle into 3 quadrilaterals (the median element is the requested
+size as well: it does NOT halve the size), but each split triangle leaves kite-shaped quads with
+two edges of ≈ 0.58 of it. Measured on the eight radar × traction fins at 1.25 mm
+(benchmarks/shell_mesh_quality.py; docs/performance.md, "Fin mesh quality and the shell step"):
+median edge in the refined zone 1.19–1.23 mm (blossom) and 1.20–1.26 mm (full_quad); the
+explicit step c_p·dt_crit 0.65–0.92 mm against 0.64–0.78 mm, 1.01–1.36× the step per fin and
+1.14× fewer DOF-steps for the stage, peaks within the recovery's error estimate of each other,
+2–3× the meshing time: not the default (the gain is not material; ``[shell] local_mesh_scheme``).
+Both stay well below square cells (c_p·dt_crit = h): the step is set by a few cells (valence-3
+nodes, a wing's 35° root/leading-edge corner)."""
+
+
 def write_refined_fin_mesh(corners: np.ndarray, mesh_size: float, points: np.ndarray,
-                           fine_size: float, radius: float, path: Path) -> Path:
+                           fine_size: float, radius: float, path: Path, *,
+                           scheme: str = "full_quad") -> Path:
     """An all-quadrilateral fin mesh refined around ``points`` (m, 3) [m] (contact points):
     element size ``fine_size`` within ``radius`` [m] of a point, growing linearly to
     ``mesh_size`` over the next 2 × mesh_size (Gmsh Distance + Threshold size fields, frontal
-    Delaunay triangles recombined into quads by the full-quad Blossom algorithm). Corners (4, 3)
-    and physical groups as :func:`build_fin_model`. Written to ``path`` (msh 4.1)."""
+    Delaunay triangles recombined into quads as :data:`REFINED_SCHEMES` ``[scheme]`` says).
+    Corners (4, 3) and physical groups as :func:`build_fin_model`. Written to ``path``
+    (msh 4.1). Raises RuntimeError if Gmsh leaves a non-quadrilateral element."""
+    if scheme not in REFINED_SCHEMES:
+        raise ValueError(f"scheme must be one of {sorted(REFINED_SCHEMES)}, got {scheme!r}")
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     corners = np.asarray(corners, float)
@@ -188,8 +215,8 @@ def write_refined_fin_mesh(corners: np.ndarray, mesh_size: float, points: np.nda
             f.setAsBackgroundMesh(th)
             size = fine_size
         opts = {"Mesh.MeshSizeExtendFromBoundary": 0, "Mesh.MeshSizeFromPoints": 0,
-                "Mesh.MeshSizeFromCurvature": 0, "Mesh.Algorithm": 6, "Mesh.RecombineAll": 1,
-                "Mesh.RecombinationAlgorithm": 3, "Mesh.Smoothing": 10,
+                "Mesh.MeshSizeFromCurvature": 0, "Mesh.RecombineAll": 1,
+                **REFINED_SCHEMES[scheme], "Mesh.Smoothing": 10,
                 "Mesh.MeshSizeMin": 0.5 * size, "Mesh.MeshSizeMax": mesh_size,
                 "Mesh.MshFileVersion": 4.1}
         saved = {k: gmsh.option.getNumber(k) for k in opts}

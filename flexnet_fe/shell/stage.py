@@ -462,8 +462,8 @@ def select_fins(shell: ShellConfig, fins: list[FinSpec], contacts: FinContacts) 
 def _fin_mesh_path(shell: ShellConfig, spec: FinSpec, contacts: FinContacts, idx: int,
                    stage_dir: Path, comm) -> Path:
     """The fin's mesh: as given, or (``shell.local_mesh_size``) re-meshed with that element size
-    within r_ex + 2 local sizes of the fin's contact points, written to
-    ``stage_dir/<fin>/mesh.msh`` (rank 0)."""
+    within r_ex + 2 local sizes of the fin's contact points (``shell.local_mesh_scheme``),
+    written to ``stage_dir/<fin>/mesh.msh`` (rank 0)."""
     pts = contacts.point[contacts.fin == idx] if idx >= 0 else np.zeros((0, 3))
     if shell.local_mesh_size is None or shell.load is not None or not len(pts):
         return spec.mesh_path
@@ -475,7 +475,8 @@ def _fin_mesh_path(shell: ShellConfig, spec: FinSpec, contacts: FinContacts, idx
     if comm.rank == 0:
         corners, h = fin_outline_from_msh(spec.mesh_path)
         write_refined_fin_mesh(corners, max(h, shell.local_mesh_size), pts,
-                               shell.local_mesh_size, radius + 2.0 * shell.local_mesh_size, path)
+                               shell.local_mesh_size, radius + 2.0 * shell.local_mesh_size, path,
+                               scheme=shell.local_mesh_scheme)
     comm.barrier()
     return path
 

@@ -238,3 +238,33 @@ def test_shell_load_option_runs_a_pressure_history_on_a_fin(tmp_path):
     assert abs(err) < 0.10 and abs(err) <= s["plate"]["peak_error_estimate_rel"], (err, vm_ref)
     with pytest.raises(ValidationError, match="supports"):
         ShellConfig(supports={"root": "glued"})
+
+
+@pytest.mark.parametrize("scheme", ["full_quad", "blossom"])
+def test_local_mesh_scheme_reaches_the_mesher(tmp_path, scheme):
+    """Wiring of ``shell.local_mesh_scheme``: the stage's refined fin mesh is the one
+    ``write_refined_fin_mesh`` writes with that scheme for the same inputs (reference: the
+    mesher called directly; equal node count and coordinates)."""
+    from flexnet_fe.missile.build import build_missile
+    from flexnet_fe.missile.config import MissileConfig
+    from flexnet_fe.missile.mesh import (fin_outline_from_msh, write_meshes,
+                                         write_refined_fin_mesh)
+    from flexnet_fe.msh import read_msh_nodes_and_cells
+    from flexnet_fe.shell.stage import FinContacts, fin_specs
+    from mpi4py import MPI
+
+    cfg = MissileConfig(preset="radar", mesh_size=0.05)
+    fin = build_missile(cfg).fins[4]
+    spec = fin_specs([fin], write_meshes(cfg, tmp_path / "meshes"))[0]
+    pts = fin.corners[1] + np.linspace(0.2, 0.6, 3)[:, None] * (fin.corners[2] - fin.corners[1])
+    contacts = FinContacts(fin_names=(fin.name,), t=np.array([0.0]), sample=np.zeros(3, np.int64),
+                           fin=np.zeros(3, np.int64), point=pts, force=np.zeros((3, 3)),
+                           width=np.full(3, 4.5e-3))
+    shell = ShellConfig(local_mesh_size=0.005, local_mesh_scheme=scheme)
+    got = stage_mod._fin_mesh_path(shell, spec, contacts, 0, tmp_path / "shell", MPI.COMM_SELF)
+    corners, h = fin_outline_from_msh(spec.mesh_path)
+    radius = 2.0 * max(fin.thickness, 4.5e-3) + 2.0 * 0.005
+    ref = write_refined_fin_mesh(corners, max(h, 0.005), pts, 0.005, radius,
+                                 tmp_path / "ref.msh", scheme=scheme)
+    x_got, x_ref = read_msh_nodes_and_cells(got)[0], read_msh_nodes_and_cells(ref)[0]
+    assert x_got.shape == x_ref.shape and np.array_equal(x_got, x_ref)
