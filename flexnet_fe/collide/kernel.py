@@ -45,6 +45,13 @@ per-pair gates (body: distance to the axis; fin: ``_fin_gap``) are supersets too
 fails a gate has no force, so every force, accumulator and contact slot is computed with the same
 arithmetic in the same order as with no broad phase (tests/collide/test_kernel_speedups.py).
 
+Call cost: a compiled call that passes the model, state and work records (≈ 50 arrays) costs
+≈ 0.5 µs when LLVM does not inline it — more than the narrow phase of a capsule. The per-pair
+functions (``segment_contacts``, ``_apply``, ``_apply_to_node``, ``_tunnel``,
+``_book_penetration``) are therefore inlined by numba (``inline="always"``), and the per-segment
+tests of the rebuild (``_clearance``, ``_fin_gap``) take plain arrays (docs/performance.md,
+"Collide kernel at fine rope resolution").
+
 A fin's core is its contact polygon (root extended into the body, ``missile.shapes``), used as it
 is wherever its closest core point lies: a rope in the corner between a fin and the body is pressed
 by both (the stored energy is the sum of the two potentials, each continuous in the positions, so
@@ -275,7 +282,7 @@ def _fin_gap(fin_pl, fi, rh, pa, pb):
     return gap - rh
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")  # (module docstring: call cost)
 def _apply_to_node(model, state, f, node, weight, force, dt):
     """Add ``weight`` × the contact force ``force`` = (f0, f1, f2) [N] to a free node's force row of ``f``;
     a held node (crop boundary) does not move, so its impulse [N s] goes to the held-node
@@ -291,7 +298,7 @@ def _apply_to_node(model, state, f, node, weight, force, dt):
         state.acc[A_PHELD + 2] += weight * f2 * dt
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")  # (module docstring: call cost)
 def _apply(model, state, wk, slot, fin, delta, s, dt):
     """Force of one (segment, part) contact on the net and the missile, Eq. (28), (29), (32).
 
@@ -349,7 +356,7 @@ def _apply(model, state, wk, slot, fin, delta, s, dt):
     return fmag
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")  # (module docstring: call cost)
 def _tunnel(model, state, slot, part, s, step):
     """Book a centre line that reached part ``part``'s core (tunnelling) at segment parameter s.
     The impulse a contact would have had to deliver to stop it, m_eff |v_rel| (m_eff =
@@ -372,7 +379,7 @@ def _tunnel(model, state, slot, part, s, step):
     return OK if model.allow_tunnel else TUNNEL
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")  # (module docstring: call cost)
 def segment_contacts(model, state, wk, e, dt, apply, step):
     """All contacts of capsule e (ends wk.pbn[i], wk.pbn[j] in B) with the missile's parts.
 
@@ -437,7 +444,7 @@ def segment_contacts(model, state, wk, e, dt, apply, step):
     return energy, OK, ncon
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")  # (module docstring: call cost)
 def _book_penetration(state, delta, ratio):
     if delta > state.acc[A_PEN]:
         state.acc[A_PEN] = delta
