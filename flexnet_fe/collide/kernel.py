@@ -26,6 +26,32 @@ Per step (symplectic Euler for the net nodes and the rigid missile, ``rigid_body
 5. missile and free nodes advanced; held nodes (crop) keep still, the impulse they receive is
    accumulated so the momentum balance closes.
 
+Candidate list (broad phase; exact: the results are bit-identical to testing every segment every
+step). Of the thousands of segments inside the missile's bounding cylinder only tens touch a
+part, so step 2 visits only the candidates of ``_build_candidates``: the live segments whose
+clearance c (``_clearance``) is ≤ CANDIDATE_SKIN. c is a lower bound of how far the capsule is
+from touching any part (c ≤ 0 for every capsule in contact or crossing a core: it is the max of
+bounding-cylinder gaps and the min of the body gap and the fins' ``_fin_gap``, each ≤ 0 when the
+capsule touches what it bounds). Each of its terms is 1-Lipschitz in D = max(|Δa|, |Δb|), the
+larger displacement (in B) of the segment's ends since the list was built: a distance from the
+segment to a fixed set changes by at most D, because every point (1 − s) a + s b of it moves by
+(1 − s) Δa + s Δb, of length ≤ D; the x range moves by ≤ D; (end radius − length)/3 by ≤
+(D + 2D)/3. So a segment left out with clearance c > 0 cannot touch while each of its ends has
+moved by less than c; every node gets the smallest c of its left-out segments as its margin,
+``_to_body`` compares each node's displacement with it every step, and the list is rebuilt as
+soon as one node reaches its margin (and at the start of every call). The segments a step
+evaluates are then a superset of those in contact, in the same (increasing) order, and the
+per-pair gates (body: distance to the axis; fin: ``_fin_gap``) are supersets too; a pair that
+fails a gate has no force, so every force, accumulator and contact slot is computed with the same
+arithmetic in the same order as with no broad phase (tests/collide/test_kernel_speedups.py).
+
+Call cost: a compiled call that passes the model, state and work records (≈ 50 arrays) costs
+≈ 0.5 µs when LLVM does not inline it — more than the narrow phase of a capsule. The per-pair
+functions (``segment_contacts``, ``_apply``, ``_apply_to_node``, ``_tunnel``,
+``_book_penetration``) are therefore inlined by numba (``inline="always"``), and the per-segment
+tests of the rebuild (``_clearance``, ``_fin_gap``) take plain arrays (docs/performance.md,
+"Collide kernel at fine rope resolution").
+
 A fin's core is its contact polygon (root extended into the body, ``missile.shapes``), used as it
 is wherever its closest core point lies: a rope in the corner between a fin and the body is pressed
 by both (the stored energy is the sum of the two potentials, each continuous in the positions, so
@@ -72,10 +98,18 @@ def _rtv(r, a0, a1, a2):
 
 
 class StepWork(NamedTuple):
-    """Scratch of one step (allocated once per call): r (3, 3) attitude B → W; w_w [rad/s] (3,)
+    """Scratch of one call (allocated once per call): r (3, 3) attitude B → W; w_w [rad/s] (3,)
     missile rate in W; f [N] (n, 3) forces on the nodes; fmt (6,) force [N] and torque about the
     CG [N m] on the missile, W; pbn [m] (n, 3) node positions in B; nb (3,) contact normal and
-    qb [m] (3,) contact point of the current pair, B."""
+    qb [m] (3,) contact point of the current pair, B.
+
+    Candidate list (``_build_candidates``): cand (ns,) int64 the segments that may touch a part
+    before the list is rebuilt, in increasing order; ncand (2,) int64 (their count, builds in
+    this call); pref [m] (n, 3) node positions in B when the list was built; marg2 [m²] (n,)
+    squared distance each node may move in B before the list must be rebuilt.
+    fin_pl (nf, 5, 4): per fin, the core's mid-plane (unit normal n (3), n·origin [m]) and its
+    4 edge half-spaces (outward unit normal in the plane (3), offset [m]), B (``_fin_gap``);
+    fin_rh [m] (nf,) rope radius + the fin's half-thickness."""
 
     r: np.ndarray
     w_w: np.ndarray
@@ -84,23 +118,62 @@ class StepWork(NamedTuple):
     pbn: np.ndarray
     nb: np.ndarray
     qb: np.ndarray
+    cand: np.ndarray
+    ncand: np.ndarray
+    pref: np.ndarray
+    marg2: np.ndarray
+    fin_pl: np.ndarray
+    fin_rh: np.ndarray
 
 
 @njit(cache=True)
-def _work(n):
+def _fin_half_spaces(model):
+    """(nf, 5, 4) the ``StepWork.fin_pl`` of the model's fins: row 0 the core's mid-plane
+    (n, n·o), rows 1..4 edge k of ``fin_poly`` (corner k → k + 1, counter-clockwise in (u, v)):
+    outward normal m = (t_v e1 − t_u e2)/|t| and offset m·(o + u_k e1 + v_k e2) [m]."""
+    nf = model.fin_half.shape[0]
+    out = np.zeros((nf, 5, 4))
+    for fi in range(nf):
+        o, ax, poly = model.fin_origin[fi], model.fin_axes[fi], model.fin_poly[fi]
+        for c in range(3):
+            out[fi, 0, c] = ax[2, c]
+            out[fi, 0, 3] += ax[2, c] * o[c]
+        nv = poly.shape[0]
+        for k in range(nv):
+            tu, tv = poly[(k + 1) % nv, 0] - poly[k, 0], poly[(k + 1) % nv, 1] - poly[k, 1]
+            ln = np.sqrt(tu * tu + tv * tv)
+            for c in range(3):
+                m_c = (tv * ax[0, c] - tu * ax[1, c]) / ln
+                out[fi, 1 + k, c] = m_c
+                out[fi, 1 + k, 3] += m_c * (o[c] + poly[k, 0] * ax[0, c] + poly[k, 1] * ax[1, c])
+    return out
+
+
+@njit(cache=True)
+def _work(model, n):
+    """The scratch of one call for ``n`` nodes; the candidate list is empty and every node's margin
+    0, so the first step builds it."""
+    ns = model.seg.shape[0]
     return StepWork(np.eye(3), np.zeros(3), np.zeros((n, 3)), np.zeros(6), np.zeros((n, 3)), np.zeros(3),
-                    np.zeros(3))
+                    np.zeros(3), np.zeros(ns, np.int64), np.zeros(2, np.int64), np.zeros((n, 3)), np.zeros(n),
+                    _fin_half_spaces(model), model.fin_half + model.rope_radius)
 
 
 @njit(cache=True)
 def _to_body(model, state, wk):
-    """Node positions in B [m] into wk.pbn (n, 3); wk.r must hold the attitude."""
-    r, pbn = wk.r, wk.pbn
+    """Node positions in B [m] into wk.pbn (n, 3); wk.r must hold the attitude. Returns True when
+    some node has moved (in B) by its margin since the candidate list was built (wk.pref,
+    wk.marg2): the list must then be rebuilt."""
+    r, pbn, pref, marg2 = wk.r, wk.pbn, wk.pref, wk.marg2
+    moved = False
     for i in range(state.x.shape[0]):
         b0, b1, b2 = _rtv(r, state.x[i, 0] - state.mx[0], state.x[i, 1] - state.mx[1], state.x[i, 2] - state.mx[2])
         pbn[i, 0] = b0 + model.cg_b[0]
         pbn[i, 1] = b1 + model.cg_b[1]
         pbn[i, 2] = b2 + model.cg_b[2]
+        d0, d1, d2 = pbn[i, 0] - pref[i, 0], pbn[i, 1] - pref[i, 1], pbn[i, 2] - pref[i, 2]
+        moved |= d0 * d0 + d1 * d1 + d2 * d2 >= marg2[i]
+    return moved
 
 
 @njit(cache=True)
@@ -115,20 +188,71 @@ def _near_missile(model, pa, pb):
     return rmin - lab <= bb[2] + rad
 
 
+CANDIDATE_SKIN = 2.0e-3
+"""[m] A segment whose clearance (``_clearance``) is at most this is a candidate (its contacts are
+evaluated every step); the others are skipped until some node has moved by its margin (≥ this).
+A larger skin means more candidates and fewer rebuilds; the results do not depend on it."""
+ROUND_OFF_GUARD = 1.0e-9
+"""[m] taken off every margin: the clearances are computed in floating point (errors ~1e-15 m at
+the missile's size), the proof below is in exact arithmetic."""
+
+
 @njit(cache=True)
-def _may_touch(model, pa, pb):
-    """Broad phase of one capsule a–b [m] (B): the missile's bounding cylinder, then the body's
-    radius or some fin's slab (the tests ``segment_contacts`` makes before any narrow phase).
-    Calling ``segment_contacts`` costs ≈ 1 µs even when it finds nothing (it takes the model,
-    state and work records), so the step skips it for capsules that cannot touch."""
-    if not _near_missile(model, pa, pb):
-        return False
-    if _axis_distance(pa, pb) <= model.bbox[3] + model.rope_radius:
-        return True
-    for fi in range(model.fin_half.shape[0]):
-        if _near_fin(model, fi, pa, pb):
-            return True
-    return False
+def _clearance(bb, rad, fin_pl, fin_rh, pa, pb):
+    """A lower bound [m] of how far the capsule a–b (B) of radius rad [m] is from touching any
+    part (bb: ``CollideModel.bbox``; fin_pl, fin_rh: ``StepWork``): > 0 proves it touches
+    nothing. It is the largest of the bounding-cylinder gaps (x range; distance to the axis −
+    r_max − r), else the smallest of the body gap (distance to the axis − R − r) and the fins'
+    ``_fin_gap`` (a fin whose mid-plane alone is farther than the smallest gap so far cannot
+    lower it and is not evaluated further); 1-Lipschitz in the ends' displacement (module
+    docstring, candidate list). Plain arrays, not the records: this runs for every segment at
+    each rebuild, and passing the model record to a function costs more than the whole test."""
+    c = max((bb[0] - rad) - max(pa[0], pb[0]), min(pa[0], pb[0]) - (bb[1] + rad))
+    if c > CANDIDATE_SKIN:
+        return c
+    axis = _axis_distance(pa, pb)
+    c = max(c, axis - (bb[2] + rad))
+    if c > CANDIDATE_SKIN:
+        return c
+    parts = axis - (bb[3] + rad)
+    for fi in range(fin_rh.shape[0]):
+        fp = fin_pl[fi]
+        da = pa[0] * fp[0, 0] + pa[1] * fp[0, 1] + pa[2] * fp[0, 2] - fp[0, 3]
+        db = pb[0] * fp[0, 0] + pb[1] * fp[0, 1] + pb[2] * fp[0, 2] - fp[0, 3]
+        if da * db > 0.0 and min(abs(da), abs(db)) - fin_rh[fi] >= parts:
+            continue  # _fin_gap ≥ its plane term ≥ parts
+        parts = min(parts, _fin_gap(fin_pl, fi, fin_rh[fi], pa, pb))
+    return max(c, parts)
+
+
+@njit(cache=True)
+def _build_candidates(model, state, wk):
+    """Rebuild the candidate list from the node positions in B (wk.pbn): the live segments whose
+    ``_clearance`` is ≤ CANDIDATE_SKIN; every other live segment gives each of its nodes a margin
+    of its clearance (minus ROUND_OFF_GUARD), and its contact slots are reset (not in contact)."""
+    nf = model.fin_half.shape[0]
+    pbn, pref, marg2 = wk.pbn, wk.pref, wk.marg2
+    for i in range(pbn.shape[0]):
+        pref[i, 0], pref[i, 1], pref[i, 2] = pbn[i, 0], pbn[i, 1], pbn[i, 2]
+        marg2[i] = np.inf
+    nc = 0
+    seg, alive, bb, rad, fin_pl, fin_rh = model.seg, state.alive, model.bbox, model.rope_radius, wk.fin_pl, wk.fin_rh
+    for e in range(seg.shape[0]):
+        if not alive[e]:
+            continue
+        i, j = seg[e, 0], seg[e, 1]
+        c = _clearance(bb, rad, fin_pl, fin_rh, pbn[i], pbn[j])
+        if c <= CANDIDATE_SKIN:
+            wk.cand[nc] = e
+            nc += 1
+            continue
+        m2 = (c - ROUND_OFF_GUARD) ** 2
+        marg2[i] = min(marg2[i], m2)
+        marg2[j] = min(marg2[j], m2)
+        for p in range(e * (1 + nf), (e + 1) * (1 + nf)):
+            state.vk[p] = 0.0
+    wk.ncand[0] = nc
+    wk.ncand[1] += 1
 
 
 @njit(cache=True)
@@ -141,18 +265,24 @@ def _axis_distance(pa, pb):
 
 
 @njit(cache=True)
-def _near_fin(model, fi, pa, pb):
-    """Broad phase: can the capsule a–b (B) touch fin fi's rounded plate (plane slab, x range)?"""
-    fp = model.fin_planes[fi]
-    rad = model.rope_radius + fp[6]
-    if max(pa[0], pb[0]) < fp[4] - rad or min(pa[0], pb[0]) > fp[5] + rad:
-        return False
-    da = pa[0] * fp[0] + pa[1] * fp[1] + pa[2] * fp[2] - fp[3]
-    db = pb[0] * fp[0] + pb[1] * fp[1] + pb[2] * fp[2] - fp[3]
-    return da * db <= 0.0 or min(abs(da), abs(db)) <= rad
+def _fin_gap(fin_pl, fi, rh, pa, pb):
+    """A lower bound [m] of (distance from the segment a–b (B) to fin fi's core) − rh (rh = r +
+    h/2 [m]): the largest of the segment's distances to the core's mid-plane and to each edge's
+    outer half-space (fin_pl: ``StepWork.fin_pl``; the core lies in the plane and inside every
+    edge's inner half-space, so each is a lower bound of the distance to it). ≤ 0 for every pair
+    in contact or crossing; 1-Lipschitz in the ends' displacement (a distance to a fixed set)."""
+    fp = fin_pl[fi]
+    da = pa[0] * fp[0, 0] + pa[1] * fp[0, 1] + pa[2] * fp[0, 2] - fp[0, 3]
+    db = pb[0] * fp[0, 0] + pb[1] * fp[0, 1] + pb[2] * fp[0, 2] - fp[0, 3]
+    gap = 0.0 if da * db <= 0.0 else min(abs(da), abs(db))
+    for k in range(1, 5):
+        sa = pa[0] * fp[k, 0] + pa[1] * fp[k, 1] + pa[2] * fp[k, 2] - fp[k, 3]
+        sb = pb[0] * fp[k, 0] + pb[1] * fp[k, 1] + pb[2] * fp[k, 2] - fp[k, 3]
+        gap = max(gap, min(sa, sb))
+    return gap - rh
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")  # (module docstring: call cost)
 def _apply_to_node(model, state, f, node, weight, force, dt):
     """Add ``weight`` × the contact force ``force`` = (f0, f1, f2) [N] to a free node's force row of ``f``;
     a held node (crop boundary) does not move, so its impulse [N s] goes to the held-node
@@ -168,7 +298,7 @@ def _apply_to_node(model, state, f, node, weight, force, dt):
         state.acc[A_PHELD + 2] += weight * f2 * dt
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")  # (module docstring: call cost)
 def _apply(model, state, wk, slot, fin, delta, s, dt):
     """Force of one (segment, part) contact on the net and the missile, Eq. (28), (29), (32).
 
@@ -226,7 +356,7 @@ def _apply(model, state, wk, slot, fin, delta, s, dt):
     return fmag
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")  # (module docstring: call cost)
 def _tunnel(model, state, slot, part, s, step):
     """Book a centre line that reached part ``part``'s core (tunnelling) at segment parameter s.
     The impulse a contact would have had to deliver to stop it, m_eff |v_rel| (m_eff =
@@ -249,7 +379,7 @@ def _tunnel(model, state, slot, part, s, step):
     return OK if model.allow_tunnel else TUNNEL
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")  # (module docstring: call cost)
 def segment_contacts(model, state, wk, e, dt, apply, step):
     """All contacts of capsule e (ends wk.pbn[i], wk.pbn[j] in B) with the missile's parts.
 
@@ -282,7 +412,7 @@ def segment_contacts(model, state, wk, e, dt, apply, step):
         state.vk[base] = 0.0
     for fi in range(nf):
         slot = base + 1 + fi
-        if not _near_fin(model, fi, pa, pb):
+        if _fin_gap(wk.fin_pl, fi, wk.fin_rh[fi], pa, pb) > 0.0:
             if apply:
                 state.vk[slot] = 0.0
             continue
@@ -314,7 +444,7 @@ def segment_contacts(model, state, wk, e, dt, apply, step):
     return energy, OK, ncon
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")  # (module docstring: call cost)
 def _book_penetration(state, delta, ratio):
     if delta > state.acc[A_PEN]:
         state.acc[A_PEN] = delta
@@ -357,17 +487,15 @@ def _rope_forces(model, state, wk, dt):
 
 @njit(cache=True)
 def _step_contacts(model, state, wk, dt, step):
-    """Contacts of all live segments near the missile. Returns (status, contacts)."""
+    """Contacts of the candidate segments (the others cannot touch: ``_build_candidates``), in
+    increasing segment order as over all segments. Returns (status, contacts)."""
     nf = model.fin_half.shape[0]
     ncon = 0
-    pbn = wk.pbn
-    for e in range(model.seg.shape[0]):
-        i, j = model.seg[e, 0], model.seg[e, 1]
-        if not state.alive[e] or not _may_touch(model, pbn[i], pbn[j]):
-            base = e * (1 + nf)
-            for p in range(1 + nf):
-                if state.vk[base + p] != 0.0:
-                    state.vk[base + p] = 0.0
+    for c in range(wk.ncand[0]):
+        e = wk.cand[c]
+        if not state.alive[e]:
+            for p in range(e * (1 + nf), (e + 1) * (1 + nf)):
+                state.vk[p] = 0.0
             continue
         _, status, nc = segment_contacts(model, state, wk, e, dt, True, step)
         ncon += nc
@@ -399,7 +527,7 @@ def _integrate(model, state, wk, dt):
 @njit(cache=True)
 def _advance(model, state, n_steps, dt):
     n = state.x.shape[0]
-    wk = _work(n)
+    wk = _work(model, n)
     f, fmt, w_w = wk.f, wk.fmt, wk.w_w
     acc = state.acc
     for k in range(3):
@@ -419,7 +547,8 @@ def _advance(model, state, n_steps, dt):
         for i in range(n):
             for k in range(3):
                 f[i, k] = model.mass[i] * model.gravity[k]
-        _to_body(model, state, wk)
+        if _to_body(model, state, wk):
+            _build_candidates(model, state, wk)
         _rope_forces(model, state, wk, dt)
         status, ncon = _step_contacts(model, state, wk, dt, step)
         if status != OK:
@@ -463,7 +592,7 @@ def energies(model, state):
         if model.free[i]:
             ke += 0.5 * model.mass[i] * (v[i, 0] ** 2 + v[i, 1] ** 2 + v[i, 2] ** 2)
     pe = 0.0
-    wk = _work(x.shape[0])
+    wk = _work(model, x.shape[0])
     wk.r[:, :] = quat_to_matrix(state.mq)
     _to_body(model, state, wk)
     uc = 0.0

@@ -426,6 +426,14 @@ def _inside_polygon(u, v, poly):
 
 
 @njit(cache=True)
+def _to_fin(p, origin, axes):
+    """Fin coordinates (u, v, w) [m] of the point p [m] (3,) in B: ((p − origin)·e1, ·e2, ·n)."""
+    return ((p[0] - origin[0]) * axes[0, 0] + (p[1] - origin[1]) * axes[0, 1] + (p[2] - origin[2]) * axes[0, 2],
+            (p[0] - origin[0]) * axes[1, 0] + (p[1] - origin[1]) * axes[1, 1] + (p[2] - origin[2]) * axes[1, 2],
+            (p[0] - origin[0]) * axes[2, 0] + (p[1] - origin[1]) * axes[2, 1] + (p[2] - origin[2]) * axes[2, 2])
+
+
+@njit(cache=True)
 def segment_core_closest(a, b, origin, axes, poly):
     """Closest pair of the segment a–b [m] (3,) in B and a fin's core polygon (its planform in
     the mid-plane). origin (3,), axes (3, 3) rows e1, e2, n, poly (k, 2) counter-clockwise in
@@ -435,11 +443,8 @@ def segment_core_closest(a, b, origin, axes, poly):
     closest core point, crossed). crossed = True when the segment passes through the core
     (dist = 0; s and q are the crossing). Exact: the closest pair of a segment and a convex
     polygon is a crossing, an end point over the polygon, or a segment–edge pair."""
-    ra = np.empty(3)
-    rb = np.empty(3)
-    for k in range(3):
-        ra[k] = (a[0] - origin[0]) * axes[k, 0] + (a[1] - origin[1]) * axes[k, 1] + (a[2] - origin[2]) * axes[k, 2]
-        rb[k] = (b[0] - origin[0]) * axes[k, 0] + (b[1] - origin[1]) * axes[k, 1] + (b[2] - origin[2]) * axes[k, 2]
+    ra = _to_fin(a, origin, axes)  # (u, v, w) tuples: no allocation in the kernel's narrow phase
+    rb = _to_fin(b, origin, axes)
     aw, bw = ra[2], rb[2]
     if (aw <= 0.0 <= bw or bw <= 0.0 <= aw) and aw != bw:
         sc = aw / (aw - bw)
@@ -476,7 +481,6 @@ def segment_body_closest(a, b, prof_kind, prof_data, prof_part):
     Returns (d [m] signed, s, n_x, n_y, n_z outward normal, q_x, q_y, q_z [m] surface point,
     part id 0 or 1)."""
     ab0, ab1, ab2 = b[0] - a[0], b[1] - a[1], b[2] - a[2]
-    p = np.empty(3)
     d0, nx0, ny0, nz0, qx0, qy0, qz0, pt0 = body_closest_scalar(a, prof_kind, prof_data, prof_part)
     g0 = nx0 * ab0 + ny0 * ab1 + nz0 * ab2
     if g0 >= 0.0:
@@ -493,7 +497,7 @@ def segment_body_closest(a, b, prof_kind, prof_data, prof_part):
         sm = (s0 * g1 - s1 * g0) / (g1 - g0)
         if not (s0 < sm < s1):
             sm = 0.5 * (s0 + s1)
-        p[0], p[1], p[2] = a[0] + sm * ab0, a[1] + sm * ab1, a[2] + sm * ab2
+        p = (a[0] + sm * ab0, a[1] + sm * ab1, a[2] + sm * ab2)  # a tuple: no allocation per iteration
         dm, nxm, nym, nzm, qxm, qym, qzm, ptm = body_closest_scalar(p, prof_kind, prof_data, prof_part)
         gm = nxm * ab0 + nym * ab1 + nzm * ab2
         if gm > 0.0:
