@@ -459,6 +459,7 @@ def _rope_forces(model, state, wk, dt):
     """Rope tensions into wk.f (Eq. (1)–(4)) and, with ``collide.air``, the rope's air force
     (Eq. (5)–(8), ``collide.air``); breaks segments past their breaking stretch."""
     x, v, seg, f = state.x, state.v, model.seg, wk.f
+    diss = state.acc[A_DISS_ROPE]  # a local sum (as ``_integrate``); nothing else writes it here
     for e in range(seg.shape[0]):
         if not state.alive[e]:
             continue
@@ -481,8 +482,9 @@ def _rope_forces(model, state, wk, dt):
             f[j, 2] -= t * u2
         # the dashpot's share T − K s: also when T is cut to 0 (a stretched rope contracting so
         # fast that K s + c l̇ < 0 cannot push), the dashpot then takes the spring's −K s l̇ > 0
-        state.acc[A_DISS_ROPE] += (t - model.k[e] * max(stretch, 0.0)) * ldot * dt
+        diss += (t - model.k[e] * max(stretch, 0.0)) * ldot * dt
         segment_air(model, state, f, e, (u0, u1, u2), lf, dt)  # collide.air (no-op when off)
+    state.acc[A_DISS_ROPE] = diss
 
 
 @njit(cache=True)
@@ -506,22 +508,29 @@ def _step_contacts(model, state, wk, dt, step):
 
 @njit(cache=True)
 def _integrate(model, state, wk, dt):
-    """Missile and free nodes one step (symplectic Euler); held nodes book their impulse."""
-    x, v, g, f, fmt = state.x, state.v, model.gravity, wk.f, wk.fmt
+    """Missile and free nodes one step (symplectic Euler); held nodes book their impulse. The
+    sums are kept in locals (same additions in the same order as into ``state.acc``, which the
+    compiler must otherwise reload and store at every node: it cannot rule out aliasing)."""
+    x, v, g, f, fmt, acc = state.x, state.v, model.gravity, wk.f, wk.fmt, state.acc
+    wg = acc[A_WORK_GRAVITY]
     for k in range(3):
-        state.acc[A_WORK_GRAVITY] += model.m_mass * g[k] * state.mv[k] * dt
+        wg += model.m_mass * g[k] * state.mv[k] * dt
     body = RigidBody(state.mx, state.mv, state.mq, state.mh, model.m_mass, model.inv_inertia)
     rigid_step(body, fmt[:3], fmt[3:], dt)
+    h0, h1, h2 = acc[A_PHELD], acc[A_PHELD + 1], acc[A_PHELD + 2]
     for i in range(x.shape[0]):
         if model.free[i]:
             a = dt / model.mass[i]
             for k in range(3):
-                state.acc[A_WORK_GRAVITY] += model.mass[i] * g[k] * v[i, k] * dt
+                wg += model.mass[i] * g[k] * v[i, k] * dt
                 v[i, k] += a * f[i, k]
                 x[i, k] += dt * v[i, k]
         else:
-            for k in range(3):
-                state.acc[A_PHELD + k] += f[i, k] * dt
+            h0 += f[i, 0] * dt
+            h1 += f[i, 1] * dt
+            h2 += f[i, 2] * dt
+    acc[A_WORK_GRAVITY] = wg
+    acc[A_PHELD], acc[A_PHELD + 1], acc[A_PHELD + 2] = h0, h1, h2
 
 
 @njit(cache=True)

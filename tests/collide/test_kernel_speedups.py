@@ -38,7 +38,7 @@ def test_segment_thrown_from_five_skins_away_in_one_call(radar, scenes):
     # Reference: (1) the Hertz impact of a mass m at speed v on a rigid flat with F = K δ^1.5,
     # δ_max = (5 m v²/(4K))^(2/5) (as tests/collide/test_contact_kernel.py); (2) the same motion
     # in calls of one step, which rebuild the candidate list at every step. The segment starts
-    # 5 skins from the wing face, outside the candidate list: in one call of 30 000 steps it is
+    # 5 skins from the wing face, outside the candidate list: in one call of ≈ 22 000 steps it is
     # caught only if the margin check rebuilds the list on the way in. A skipped contact would
     # tunnel (status TUNNEL) or change the state; the two runs must agree bit for bit.
     m, v, kc = 1.6e-3, 100.0, 1e9
