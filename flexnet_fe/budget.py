@@ -167,14 +167,14 @@ def collide_cost(case, file) -> StageCost:
     energy = 0.5 * _missile_mass(case.missile) * cc.impact_speed * cc.impact_speed
     _finite(file, "collide.impact_speed", "missile kinetic energy ½mv² [J]", energy)
     dt = _collide_step(case, l0)
-    rows = cc.duration / cc.output_interval
+    rows = cc.end_time / cc.output_interval  # up to the cap: the run goes on while the contact does
     mem = BASE_PROCESS + 100 * F8 * (nodes + segs) + 40 * F8 * rows
-    cost = StageCost("collide", nodes, 3 * nodes + 6, cc.duration / dt, mem,
+    cost = StageCost("collide", nodes, 3 * nodes + 6, cc.end_time / dt, mem,
                      60 * (nodes + segs) * cc.snapshots + 40 * 25 * rows,
                      {"nodes": "net.mesh_size", "steps": "collide.impact_speed",
                       "memory": _mem_driver(100 * F8 * (nodes + segs), 40 * F8 * rows, "net.mesh_size",
                                             "collide.output_interval"), "disk": "collide.output_interval"})
-    cost.detail = (f"{rows:.3g} history rows = collide.duration / collide.output_interval, "
+    cost.detail = (f"{rows:.3g} history rows at most = collide.max_duration (or duration) / collide.output_interval, "
                    f"dt ≈ {dt:.3g} s (collide step rule, rope_split {cc.rope_split}, fin_piece_length {cc.fin_piece_length})")
     return cost
 

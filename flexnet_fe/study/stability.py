@@ -20,7 +20,7 @@ from flexnet_fe.atmosphere import isa
 from flexnet_fe.config import load_case
 from flexnet_fe.errors import NumericalError
 from flexnet_fe.study.common import Context, measured, rel_error
-from flexnet_fe.study.scenes import CASE, QUICK_COLLIDE, QUICK_DEPLOY, case_with
+from flexnet_fe.study.scenes import CASE, NO_FIN_CUT, QUICK_COLLIDE, QUICK_DEPLOY, case_with
 
 LOG = logging.getLogger("flexnet.study.stability")
 
@@ -141,10 +141,10 @@ def shell_map(ctx: Context) -> list[dict]:
 
 CONTACT_SCENE = ("collide.net_source='flat_taut'", "net.edge_length=0.6", "net.mesh_size=0.1",
                  "collide.stiffness_rule='given'", "collide.snapshots=2", "collide.output_interval=1e-4",
-                 "collide.rope_split=1")
+                 "collide.rope_split=1", *NO_FIN_CUT)
 """A 0.6 m flat patch of the rope (49 nodes) centred on the missile's path: the nose, body and
 the four wings and rudders pass through it (the wings reach beyond the body's radius). Ropes not
-split (rope_split 1): the map is about the contact law and its guard at a given stiffness, not
+split (rope_split 1) nor cut at the fins (``scenes.NO_FIN_CUT``): the map is about the contact law and its guard at a given stiffness, not
 the rope's resolution (the split would multiply its cost ≈ 10×, measured)."""
 
 

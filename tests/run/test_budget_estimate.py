@@ -22,12 +22,14 @@ def test_collide_steps_match_the_stage(tmp_path, split):
     # knows only the undeployed net, whose rest lengths the flat net has), 0.2 ms. The estimate follows the stage's step rule at the split
     # piece's node mass; the stage then shortens dt so that an output interval is a whole number of
     # steps n, which changes the count by less than 1/n. (The cut at the fins is off here: its
-    # pieces' lengths depend on the held geometry, which the estimate does not know — budget.py.)
+    # pieces' lengths depend on the held geometry, which the estimate does not know — budget.py;
+    # no max_duration: the estimate counts up to the cap, the stage stops when the contact is over.)
     case, file = load_case(CASES / "radar_traction")
     net = type(case.net).model_validate({**case.net.model_dump(), "edge_length": 1.5, "corner_mass": 1e-3})
     cfg = type(case.collide).model_validate({**case.collide.model_dump(), "net_source": "flat_taut",
                                              "duration": 2e-4, "snapshots": 2, "rope_split": split,
-                                             "aim_point": (0.025, 0.025), "fin_piece_length": None})
+                                             "aim_point": (0.025, 0.025), "fin_piece_length": None,
+                                             "max_duration": None})
     case = case.model_copy(update={"net": net, "collide": cfg})
     estimated = collide_cost(case, file).steps
     summary = run_collide(net, None, case.missile, cfg, isa(case.atmosphere.altitude), None, tmp_path,
