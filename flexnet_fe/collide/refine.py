@@ -224,7 +224,7 @@ def _cuts_in(intervals: list[tuple[float, float]], length: float, piece: float) 
 
 
 def fin_strip_cuts(net: HeldNet, missile, cfg) -> tuple[np.ndarray, list[np.ndarray]]:
-    """(idx (s,) int64, cuts): the segments (hub links excluded) whose capsule passes within
+    """(idx (s,) int64, cuts): the segments (hub links excluded, and those no cut divides) whose capsule passes within
     ``cfg.fin_split_margin`` [m] of a fin's strip (:func:`fin_strips`, in the plane across the
     path through ``cfg.aim_point``), and for each the cut fractions that divide the part of it
     within that distance into equal pieces of at most ``cfg.fin_piece_length`` [m] (length: the
@@ -246,8 +246,9 @@ def fin_strip_cuts(net: HeldNet, missile, cfg) -> tuple[np.ndarray, list[np.ndar
             found.setdefault(int(i), []).append((float(lo[i]), float(hi[i])))
     idx = np.array(sorted(found), dtype=np.int64)
     length = np.maximum(np.linalg.norm(net.x[q[idx]] - net.x[p[idx]], axis=1), net.rest_length[idx])
-    cuts = [_cuts_in(_merge(found[int(i)]), float(L), cfg.fin_piece_length) for i, L in zip(idx, length)]
-    return idx, cuts
+    cuts = [_cuts_in(found[int(i)], float(L), cfg.fin_piece_length) for i, L in zip(idx, length)]
+    cut = np.array([c.size > 0 for c in cuts], dtype=bool)  # a segment shorter than a piece stays whole
+    return idx[cut], [c for c, keep in zip(cuts, cut) if keep]
 
 
 def refine_near_fins(net: HeldNet, missile, cfg) -> HeldNet:

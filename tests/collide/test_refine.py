@@ -11,6 +11,7 @@ from flexnet_fe.cli import main
 from flexnet_fe.collide.config import CollideConfig
 from flexnet_fe.collide.refine import (fin_strip_cuts, fin_strips, refine_near_fins, split_at, split_near_path,
                                       split_segments, stadium_interval)
+from flexnet_fe.collide.scene import missile_attitude
 from flexnet_fe.collide.simulate import interaction_over, simulate
 
 from .test_collide import _fin_edge_scene
@@ -138,6 +139,7 @@ def test_refine_near_fins_cuts_only_where_a_fin_passes(radar, scenes):
     net = scenes.flat_net(2.0, 0.5)
     cfg = CollideConfig(net_source="flat_taut", fin_piece_length=0.01, fin_split_margin=0.02)
     assert refine_near_fins(net, radar, cfg.model_copy(update={"fin_piece_length": None})) is net
+    assert refine_near_fins(net, radar, cfg.model_copy(update={"fin_piece_length": 1.0})) is net  # > every bar
     idx, cuts = fin_strip_cuts(net, radar, cfg)
     assert idx.size > 0
     fine = refine_near_fins(net, radar, cfg)
@@ -148,10 +150,8 @@ def test_refine_near_fins_cuts_only_where_a_fin_passes(radar, scenes):
     mid = 0.5 * (p + q)
     length = np.linalg.norm(q - p, axis=1)
     d_strip = np.full(mid.shape[0], np.inf)
-    for f0, f1, half in fin_strips(radar):  # B (y, z) = W (y, x) rotated: for incidence 0, roll 0
-        from flexnet_fe.collide.scene import missile_attitude
-
-        yz = (mid - np.array([*cfg.aim_point, 0.0])) @ missile_attitude(0.0, 0.0)[:, 1:]
+    yz = (mid - np.array([*cfg.aim_point, 0.0])) @ missile_attitude(0.0, 0.0)[:, 1:]  # (y_b, z_b), incidence 0, roll 0
+    for f0, f1, half in fin_strips(radar):
         e = (f1 - f0) / np.linalg.norm(f1 - f0)
         s = np.clip((yz - f0) @ e, 0.0, np.linalg.norm(f1 - f0))
         d_strip = np.minimum(d_strip, np.linalg.norm(yz - (f0 + s[:, None] * e), axis=1) - half)
