@@ -156,6 +156,36 @@ def test_friction_opposes_slip_and_is_continuous():
     assert np.linalg.norm(out) == pytest.approx(5.0 * math.tanh(0.5), rel=1e-12)
 
 
+def test_stick_cap_makes_an_explicit_step_stop_the_slip_without_chatter():
+    # Reference: Coulomb friction on a point of mass m sliding at v0 under a constant normal force
+    # F_n stops it at t* = m v0 / (μ F_n) and then holds it (stick). A 1.4 mm rope piece (22 mg)
+    # pressed with 5 kN at dt = 40 ns is far past the explicit limit of the regularised law
+    # (slope μF_n/v_reg = 1e4 kg/s against m/dt = 550 kg/s): uncapped, the slip overshoots and
+    # chatters at ±μF_n dt/m ≈ 18 m/s after t*; with stick = ½ m/dt (the kernel's
+    # STICK_FRACTION) each step removes at most half the slip, so it decays to zero without ever
+    # reversing, reaching |v| < v_reg within 1 % of t* (+ a few steps).
+    m, fn, mu, v_reg, dt, v0 = 2.2e-5, 5e3, 0.2, 0.1, 4e-8, 30.0
+    t_stop = m * v0 / (mu * fn)
+    n = int(3 * t_stop / dt)
+
+    def run(stick):
+        v, vs = v0, np.empty(n)
+        for i in range(n):
+            v += dt * friction_force(fn, mu, v, 0.0, 0.0, v_reg, stick)[0] / m
+            vs[i] = v
+        return vs
+
+    free = run(np.inf)
+    assert np.abs(free[-100:]).max() > 5.0  # chatter (the defect the cap removes)
+    capped = run(0.5 * m / dt)
+    assert capped.min() >= 0.0  # never reversed
+    t_reach = dt * (1 + np.argmax(capped < v_reg))
+    assert t_reach == pytest.approx(t_stop, rel=0.01, abs=10 * dt)
+    assert capped[-1] < 1e-6 * v_reg
+    # below the explicit limit the cap is inactive: the force is the regularised law's
+    assert friction_force(10.0, 0.2, 1.0, 0.0, 0.0, 0.1, 1e9)[0] == friction_force(10.0, 0.2, 1.0, 0.0, 0.0, 0.1)[0]
+
+
 def test_approach_speed_rule_bounds_the_damping():
     # Reference: the rule's definition (law.approach_speed): v_k = max(previous v_k, δ̇, floor).
     # A contact that begins at 1 m/s and is later compressed at 300 m/s: with v_k frozen at the
