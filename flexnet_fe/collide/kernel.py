@@ -309,6 +309,20 @@ def _apply_to_node(model, state, f, node, weight, force, dt):
 
 
 @njit(cache=True, inline="always")  # (module docstring: call cost)
+def _take_wrench(out, k, lever, force):
+    """The missile's reaction to a force on the rope: out[k:k+3] −= force [N] and out[k+3:k+6] −=
+    lever × force [N m] (lever [m] from the CG to the contact point, W)."""
+    l0, l1, l2 = lever
+    f0, f1, f2 = force
+    out[k] -= f0
+    out[k + 1] -= f1
+    out[k + 2] -= f2
+    out[k + 3] -= l1 * f2 - l2 * f1
+    out[k + 4] -= l2 * f0 - l0 * f2
+    out[k + 5] -= l0 * f1 - l1 * f0
+
+
+@njit(cache=True, inline="always")  # (module docstring: call cost)
 def _book_dissipative(model, wk, node, weight, forces):
     """Add ``weight`` × the contact damping and friction forces ``forces`` (6 floats) [N] to a free
     node's row of wk.fd (``_book_mean_velocity``); a held node does not move: no work."""
@@ -356,25 +370,9 @@ def _apply(model, state, wk, slot, fin, delta, s, dt):
     fd0, fd1, fd2 = (fn - fel) * nw0, (fn - fel) * nw1, (fn - fel) * nw2
     _book_dissipative(model, wk, i, w, (fd0, fd1, fd2, ft0, ft1, ft2))
     _book_dissipative(model, wk, j, s, (fd0, fd1, fd2, ft0, ft1, ft2))
-    md = wk.md
-    md[0] -= fd0
-    md[1] -= fd1
-    md[2] -= fd2
-    md[3] -= l1 * fd2 - l2 * fd1
-    md[4] -= l2 * fd0 - l0 * fd2
-    md[5] -= l0 * fd1 - l1 * fd0
-    md[6] -= ft0
-    md[7] -= ft1
-    md[8] -= ft2
-    md[9] -= l1 * ft2 - l2 * ft1
-    md[10] -= l2 * ft0 - l0 * ft2
-    md[11] -= l0 * ft1 - l1 * ft0
-    fmt[0] -= f0
-    fmt[1] -= f1
-    fmt[2] -= f2
-    fmt[3] -= l1 * f2 - l2 * f1
-    fmt[4] -= l2 * f0 - l0 * f2
-    fmt[5] -= l0 * f1 - l1 * f0
+    _take_wrench(wk.md, 0, (l0, l1, l2), (fd0, fd1, fd2))
+    _take_wrench(wk.md, 6, (l0, l1, l2), (ft0, ft1, ft2))
+    _take_wrench(fmt, 0, (l0, l1, l2), (f0, f1, f2))
     state.acc[A_DISS_CONTACT] += (fn - fel) * ddot * dt
     state.acc[A_DISS_FRICTION] -= (ft0 * vt0 + ft1 * vt1 + ft2 * vt2) * dt
     state.part_imp[fin + 1, 0] += fn * dt
