@@ -101,6 +101,15 @@ def _rtv(r, a0, a1, a2):
             r[0, 2] * a0 + r[1, 2] * a1 + r[2, 2] * a2)
 
 
+@njit(cache=True)
+def _world_rate(r, h, inv_inertia):
+    """The missile's angular velocity ω_W = R I_B⁻¹ Rᵀ h [rad/s] (three floats) from its attitude
+    R (3, 3) B → W, angular momentum h [kg m²/s] (3,) in W and I_B⁻¹ (3, 3)."""
+    hb0, hb1, hb2 = _rtv(r, h[0], h[1], h[2])
+    wb0, wb1, wb2 = _rv(inv_inertia, hb0, hb1, hb2)
+    return _rv(r, wb0, wb1, wb2)
+
+
 class StepWork(NamedTuple):
     """Scratch of one call (allocated once per call): r (3, 3) attitude B → W; w_w [rad/s] (3,)
     missile rate in W; f [N] (n, 3) forces on the nodes; fmt (6,) force [N] and torque about the
@@ -603,10 +612,7 @@ def _book_mean_velocity(model, state, wk, mv0, dt):
                 cf += fd[n, 3 + k] * f[n, k] * a
             for k in range(6):
                 fd[n, k] = 0.0
-    r = quat_to_matrix(state.mq)
-    hb0, hb1, hb2 = _rtv(r, state.mh[0], state.mh[1], state.mh[2])
-    wb0, wb1, wb2 = _rv(model.inv_inertia, hb0, hb1, hb2)
-    w1 = _rv(r, wb0, wb1, wb2)
+    w1 = _world_rate(quat_to_matrix(state.mq), state.mh, model.inv_inertia)
     md = wk.md
     for k in range(3):
         dv = state.mv[k] - mv0[k]
@@ -634,9 +640,7 @@ def _advance(model, state, n_steps, dt):
     for step in range(n_steps):
         wk.r[:, :] = quat_to_matrix(state.mq)
         r = wk.r
-        hb0, hb1, hb2 = _rtv(r, state.mh[0], state.mh[1], state.mh[2])
-        wb0, wb1, wb2 = _rv(model.inv_inertia, hb0, hb1, hb2)
-        w_w[0], w_w[1], w_w[2] = _rv(r, wb0, wb1, wb2)
+        w_w[0], w_w[1], w_w[2] = _world_rate(r, state.mh, model.inv_inertia)
         for k in range(3):
             fmt[k] = model.m_mass * model.gravity[k]
             fmt[3 + k] = 0.0
