@@ -29,10 +29,12 @@ How a segment is cut (:func:`split_at`, pieces of fractions f_j of the segment, 
   piece: half of f_j ρ A l0 to each end of piece j (equal pieces: each end node keeps 1/(2k),
   each new node 1/k); concentrated masses stay where they are. Total mass, centre of mass and
   (at rest) momentum are unchanged;
-* dashpots (Eq. (4)): the rope keeps its material viscosity, i.e. the dashpots in series make the
-  segment's dashpot: c_piece = c_segment / f_j (k c for equal pieces) — the same rule the net
-  builder uses for ``net.subdivisions`` (``net.topology._rope_segments``), so the split converges
-  to the same continuum rope as a finer deploy mesh.
+* dashpots (Eq. (4)), by the rope's ``damping_law`` — the same rule the net builder uses for
+  ``net.subdivisions`` (``net.topology._rope_segments``), so a split at collision start and a finer
+  deploy mesh make the same rope: ``"segment"`` (default, the paper's per-segment law) gives every
+  piece c = 2ζ√(μK) from its own stiffness EA/(f_j l0) and its end nodes' masses after re-lumping
+  (the segments left whole keep theirs); ``"material"`` keeps the rope's viscosity, the dashpots in
+  series making the segment's dashpot: c_piece = c_segment / f_j (k c for equal pieces).
 
 Hub links (rotary nets) are not split: their rest length is measured from the hub centre.
 """
@@ -45,6 +47,7 @@ import numpy as np
 
 from flexnet_fe.collide.crop import free_nodes
 from flexnet_fe.collide.scene import HeldNet, missile_attitude, shape_bbox
+from flexnet_fe.net.topology import segment_damping, segment_stiffness
 
 
 def near_path_segments(x: np.ndarray, springs: np.ndarray, hub_link: np.ndarray, aim: np.ndarray,
@@ -67,8 +70,8 @@ def _cut_points(xa: np.ndarray, xb: np.ndarray, cuts: list[np.ndarray]) -> np.nd
 def split_at(net: HeldNet, idx: np.ndarray, cuts: list[np.ndarray]) -> HeldNet:
     """``net`` with each segment ``idx[i]`` (s,) int64 cut at the chord fractions ``cuts[i]``
     (interior points of (0, 1), increasing): piece j spans the fraction f_j of its segment
-    (module docstring: chord nodes, E·A kept, rest length and slack offset × f_j, dashpot
-    c / f_j — pieces in series —, the segment's rope mass ρ A l0 re-lumped piece by piece, half of
+    (module docstring: chord nodes, E·A kept, rest length and slack offset × f_j, dashpot by
+    the rope's damping law (:func:`_piece_damping`), the segment's rope mass ρ A l0 re-lumped piece by piece, half of
     each piece's f_j ρ A l0 to each of its ends; total mass and centre of mass unchanged). The new
     nodes are appended after the old ones (old node ids unchanged); the pieces replace their
     segments at the end of the segment list, in segment order."""
@@ -97,16 +100,33 @@ def split_at(net: HeldNet, idx: np.ndarray, cuts: list[np.ndarray]) -> HeldNet:
         rep = np.repeat(arr[idx], n_piece, axis=0)
         return np.concatenate([arr[keep], rep if scale is None else rep * scale])
 
+    all_mass = np.concatenate([mass, new_mass])
     model = dataclasses.replace(
         m, x0=np.concatenate([m.x0, _cut_points(m.x0[a], m.x0[b], cuts)]),
-        v0=np.concatenate([m.v0, np.zeros((n_new, 3))]), mass=np.concatenate([mass, new_mass]),
+        v0=np.concatenate([m.v0, np.zeros((n_new, 3))]), mass=all_mass,
         springs=np.concatenate([m.springs[keep], pieces]).astype(np.int64),
         rest_length=per_piece(m.rest_length, f_all), stiffness_ea=per_piece(m.stiffness_ea),
-        damping=per_piece(m.damping, 1.0 / f_all), slack_offset=per_piece(m.slack_offset, f_all),
+        damping=np.concatenate([m.damping[keep], _piece_damping(net.rope, idx, n_piece, f_all, m, all_mass,
+                                                                 pieces)]),
+        slack_offset=per_piece(m.slack_offset, f_all),
         diameter=per_piece(m.diameter), drag_free=np.concatenate([m.drag_free, np.zeros(n_new, dtype=bool)]),
         hub_link=per_piece(m.hub_link), anchor_angle=per_piece(m.anchor_angle))
     return dataclasses.replace(net, model=model, x=np.concatenate([net.x, _cut_points(net.x[a], net.x[b], cuts)]),
                                rest_length=per_piece(net.rest_length, f_all))
+
+
+def _piece_damping(rope, idx: np.ndarray, n_piece: np.ndarray, f_all: np.ndarray, model, mass: np.ndarray,
+                   pieces: np.ndarray) -> np.ndarray:
+    """Dashpot coefficients [N s/m] (p,) of the pieces (p, 2) of the split segments ``idx`` (s,) of
+    ``model``, Eq. (4) read by ``rope.damping_law``; n_piece (s,) the piece counts, f_all (p,) the
+    pieces' fractions of their segments, mass (n,) [kg] the node masses after re-lumping.
+    "segment": c = 2ζ√(μK), K = EA/(f l0), μ the reduced mass of the piece's end nodes
+    (``net.topology.segment_damping``); "material": c_segment / f (dashpots in series)."""
+    if rope.damping_law == "material":
+        return np.repeat(model.damping[idx], n_piece) / f_all
+    stiffness = segment_stiffness(np.repeat(model.stiffness_ea[idx], n_piece),
+                                  np.repeat(model.rest_length[idx], n_piece) * f_all)
+    return segment_damping(stiffness, mass[pieces[:, 0]], mass[pieces[:, 1]], rope.damping_ratio)
 
 
 def split_segments(net: HeldNet, idx: np.ndarray, k: int) -> HeldNet:

@@ -32,6 +32,13 @@ class RopeNet(Section):
     density: Positive = Field(1000.0, description="rope material density [kg/m^3] (paper: 1000)")
     damping_ratio: NonNegative = Field(0.05, lt=1.0, description=(
         "damping ratio ζ of the axial mode of one bar [-], Eq. (4); not given in the paper"))
+    damping_law: Literal["segment", "material"] = Field("segment", description=(
+        "how Eq. (4) reads on a subdivided rope (net.subdivisions, collide rope_split / "
+        "fin_piece_length): 'segment' = every segment gets c = 2ζ√(μK) from its own stiffness and "
+        "end masses (the paper's per-segment law: a finer rope damps less per metre); 'material' = "
+        "the rope keeps the viscosity of a whole mesh bar, dashpots in series (c_piece = k c_bar), "
+        "so refinement converges to a viscous continuum. Identical for unsplit ropes. See "
+        "docs/collide_convergence.md"))
     poisson_ratio: float = Field(0.3, ge=0.0, lt=0.5, description=(
         "Poisson's ratio ν of the rope [-], Eq. (30)-(31) (not given in the paper)"))
     transverse_modulus: Positive | None = Field(None, description=(

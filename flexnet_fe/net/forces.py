@@ -112,7 +112,9 @@ def segment_aero_force(u, length, vrel, rho, diameter):
 class RopeMaterial(NamedTuple):
     """The rope of a net, one home for its material (issue 14): youngs_modulus E [Pa] (axial,
     Eq. (3)), poisson_ratio ν [-], density ρ [kg/m³], diameter d [m], transverse_modulus E_t [Pa]
-    (the contact law's E1, Eq. (30)), breaking_strength σ_b [Pa] (inf: unbreakable)."""
+    (the contact law's E1, Eq. (30)), breaking_strength σ_b [Pa] (inf: unbreakable), damping_ratio
+    ζ [-] and damping_law ('segment' or 'material') of the dashpots, Eq. (4)
+    (``net.config.RopeNet.damping_law``)."""
 
     youngs_modulus: float
     poisson_ratio: float
@@ -120,6 +122,8 @@ class RopeMaterial(NamedTuple):
     diameter: float
     transverse_modulus: float
     breaking_strength: float
+    damping_ratio: float = 0.0
+    damping_law: str = "segment"
 
     @property
     def radius(self) -> float:
@@ -137,4 +141,5 @@ def rope_material(net_cfg) -> RopeMaterial:
     e = float(net_cfg.youngs_modulus)
     return RopeMaterial(e, float(net_cfg.poisson_ratio), float(net_cfg.density), float(net_cfg.rope_diameter),
                         e if net_cfg.transverse_modulus is None else float(net_cfg.transverse_modulus),
-                        math.inf if net_cfg.breaking_strength is None else float(net_cfg.breaking_strength))
+                        math.inf if net_cfg.breaking_strength is None else float(net_cfg.breaking_strength),
+                        float(net_cfg.damping_ratio), str(net_cfg.damping_law))

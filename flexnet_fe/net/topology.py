@@ -167,13 +167,16 @@ class _Nodes:
 def _rope_segments(cfg: TractionNet | RotaryNet, springs: np.ndarray, rest: np.ndarray, mass: np.ndarray) -> dict:
     """Rope law arrays of NetModel (stiffness_ea, damping, slack_offset, diameter), each (m,),
     and its ``rope`` material, from the ``[net]`` rope fields; ``mass`` (n,) [kg] the node masses incl. concentrated ones.
-    ζ is the damping ratio of a whole mesh bar (k = 1); a bar split into k segments keeps the
-    same material viscosity (dashpots in series: c_segment = k c_bar), so refinement converges."""
+    ζ is the damping ratio of a whole mesh bar (k = 1). A bar split into k segments: with
+    ``damping_law = "segment"`` every segment gets Eq. (4) from its own stiffness and end masses
+    (the paper's per-segment law); with ``"material"`` the rope keeps the viscosity of the bar
+    (dashpots in series: c_segment = k c_bar), so refinement converges to a viscous continuum."""
     k = cfg.subdivisions
     rope = rope_material(cfg)
     ea = np.full(len(springs), rope.youngs_modulus * rope_area(rope.diameter))
-    damping = k * segment_damping(segment_stiffness(ea, rest), mass[springs[:, 0]], mass[springs[:, 1]],
-                                  cfg.damping_ratio)
+    factor = k if rope.damping_law == "material" else 1
+    damping = factor * segment_damping(segment_stiffness(ea, rest), mass[springs[:, 0]], mass[springs[:, 1]],
+                                       rope.damping_ratio)
     return dict(stiffness_ea=ea, damping=damping, slack_offset=np.full(len(springs), cfg.slack_offset / k),
                 diameter=np.full(len(springs), rope.diameter), rope=rope)
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -40,13 +41,28 @@ def _nodal_rope_forces(net) -> np.ndarray:
     return out
 
 
+def _eq4(model, sl) -> np.ndarray:
+    """Eq. (4) written out for the segments ``sl`` of a model: c = 2 ζ √(μ K), μ = m_i m_j/(m_i + m_j)
+    of the end nodes, K = EA/l0 (ζ = 0.05, the TractionNet default) — independent of
+    net.topology.segment_damping."""
+    i, j = model.springs[sl, 0], model.springs[sl, 1]
+    mu = model.mass[i] * model.mass[j] / (model.mass[i] + model.mass[j])
+    return 2.0 * 0.05 * np.sqrt(mu * model.stiffness_ea[sl] / model.rest_length[sl])
+
+
+def _with_law(net, law):
+    return dataclasses.replace(net, rope=net.rope._replace(damping_law=law))
+
+
+@pytest.mark.parametrize("law", ["segment", "material"])
 @pytest.mark.parametrize("k", [2, 3, 8])
-def test_split_keeps_mass_centre_rope_and_dashpots(scenes, k):
+def test_split_keeps_mass_centre_rope_and_dashpots(scenes, k, law):
     # Reference: the split's definition (collide.refine) — closed forms. Mass and centre of mass
     # unchanged (the rope mass ρ A l0 is only re-lumped along the chord); new nodes at rest (momentum
     # 0 = before); per split segment the k pieces keep E·A, their rest lengths and slack offsets add
-    # up to the segment's, k springs in series give EA/l0 and k dashpots in series give c.
-    net = _stretched(scenes)
+    # up to the segment's, k springs in series give EA/l0; dashpots: "material" — k dashpots in
+    # series give c; "segment" — every piece has Eq. (4) from its own K and end masses.
+    net = _with_law(_stretched(scenes), law)
     m = net.model
     idx = np.arange(0, m.n_springs, 3)
     fine = split_segments(net, idx, k)
@@ -63,7 +79,10 @@ def test_split_keeps_mass_centre_rope_and_dashpots(scenes, k):
     assert np.all(chains(fm.stiffness_ea) == m.stiffness_ea[idx, None])
     k_series = 1.0 / (1.0 / chains(fm.stiffness_ea / fm.rest_length)).sum(axis=1)
     np.testing.assert_allclose(k_series, m.stiffness[idx], rtol=1e-13)
-    np.testing.assert_allclose(1.0 / (1.0 / chains(fm.damping)).sum(axis=1), m.damping[idx], rtol=1e-13)
+    if law == "material":
+        np.testing.assert_allclose(1.0 / (1.0 / chains(fm.damping)).sum(axis=1), m.damping[idx], rtol=1e-13)
+    else:
+        np.testing.assert_allclose(fm.damping[pieces], _eq4(fm, pieces), rtol=1e-13)
     # untouched segments keep every field
     keep = np.setdiff1d(np.arange(m.n_springs), idx)
     np.testing.assert_array_equal(fm.springs[:keep.size], m.springs[keep])
@@ -84,12 +103,14 @@ def test_split_net_at_rest_stays_at_rest(scenes):
     assert np.abs(f1[n:]).max() < 1e-12 * scale
 
 
-def test_uneven_split_keeps_mass_centre_rope_and_dashpots(scenes):
+@pytest.mark.parametrize("law", ["segment", "material"])
+def test_uneven_split_keeps_mass_centre_rope_and_dashpots(scenes, law):
     # Reference: closed forms of the split's definition (collide.refine.split_at). Pieces of
     # fractions f_j: rope mass f_j ρ A l0 half to each end, so mass and centre of mass are unchanged
     # and a new node between pieces j, j+1 weighs (f_j + f_j+1) ρ A l0 / 2; rest lengths f_j l0
-    # add up to l0; springs EA/(f_j l0) and dashpots c/f_j in series give the segment's EA/l0 and c.
-    net = _stretched(scenes)
+    # add up to l0; springs EA/(f_j l0) in series give the segment's EA/l0; dashpots: "material"
+    # c/f_j in series give c, "segment" Eq. (4) per piece.
+    net = _with_law(_stretched(scenes), law)
     m = net.model
     idx = np.array([3, 10, 17])
     cuts = [np.array([0.1, 0.15, 0.7]), np.array([0.5]), np.array([0.02, 0.98])]
@@ -106,7 +127,10 @@ def test_uneven_split_keeps_mass_centre_rope_and_dashpots(scenes):
     first = slice(m.n_springs - idx.size, m.n_springs - idx.size + 4)  # the four pieces of idx[0]
     np.testing.assert_allclose(fine.rest_length[first], net.rest_length[idx[0]] * np.array([0.1, 0.05, 0.55, 0.3]),
                                rtol=1e-12)
-    np.testing.assert_allclose(1.0 / (1.0 / fm.damping[first]).sum(), m.damping[idx[0]], rtol=1e-13)
+    if law == "material":
+        np.testing.assert_allclose(1.0 / (1.0 / fm.damping[first]).sum(), m.damping[idx[0]], rtol=1e-13)
+    else:
+        np.testing.assert_allclose(fm.damping[first], _eq4(fm, first), rtol=1e-13)
     np.testing.assert_allclose(1.0 / (1.0 / (fm.stiffness_ea / fm.rest_length)[first]).sum(), m.stiffness[idx[0]],
                                rtol=1e-13)
     # the uneven split of a taut net at rest is still at rest (every chord node feels equal tensions)

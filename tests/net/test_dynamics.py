@@ -150,3 +150,19 @@ def test_falling_broadside_segment_terminal_speed(make_chain):
     # the explicit update reaches the discrete fixed point of the same balance: exact up to round-off
     np.testing.assert_allclose(st.v[:, 1], -vt, rtol=1e-6)
     np.testing.assert_allclose(st.v[:, [0, 2]], 0.0, atol=1e-9)
+
+
+@pytest.mark.parametrize("law", ["segment", "material"])
+def test_subdivided_rope_dashpots_follow_the_damping_law(law):
+    # Reference: Eq. (4) written out, c = 2 ζ √(μ K) with μ = m_i m_j/(m_i + m_j) of the segment's
+    # end nodes and K = EA/l0 (independent of segment_damping). "segment": every segment of a bar
+    # split into k = 3 has its own Eq. (4); "material": k times the Eq. (4) of its own values, the
+    # k dashpots in series then give the viscosity of the whole bar. Unsplit (k = 1): both laws equal.
+    zeta, k = 0.1, 3
+    cfg = dict(edge_length=0.5, mesh_size=0.1, damping_ratio=zeta, damping_law=law)
+    fine, whole = build_traction(TractionNet(subdivisions=k, **cfg)), build_traction(TractionNet(**cfg))
+    i, j = fine.springs[:, 0], fine.springs[:, 1]
+    eq4 = 2 * zeta * np.sqrt(fine.mass[i] * fine.mass[j] / (fine.mass[i] + fine.mass[j]) * fine.stiffness)
+    np.testing.assert_allclose(fine.damping, eq4 * (k if law == "material" else 1), rtol=1e-13)
+    other = build_traction(TractionNet(**{**cfg, "damping_law": "material" if law == "segment" else "segment"}))
+    np.testing.assert_array_equal(whole.damping, other.damping)

@@ -1,0 +1,120 @@
+"""Rope resolution at the fins (issue 9 §6): one paper case's impact at several
+``collide.fin_piece_length`` and both readings of Eq. (4) (``net.damping_law``), headlines and
+cost side by side; and the chart of docs/img/collide_rope_resolution.png.
+
+    PYTHONPATH=. .venv/bin/python benchmarks/collide_rope_resolution.py run CASE DEPLOY_DIR OUT.jsonl \
+        [--pieces 1.4e-3 0.7e-3 0.35e-3] [--law segment] [--set KEY=VALUE ...]
+    PYTHONPATH=. .venv/bin/python benchmarks/collide_rope_resolution.py plot OUT.jsonl PNG
+
+``run`` appends one JSON row per point to OUT.jsonl (case, law, piece [m], Δv/v, CFC peak [m/s²],
+per-fin impulse [N s], contact duration [s], energy error, steps, dt [s], wall and CPU [s], the
+machine's load); DEPLOY_DIR is the ``deploy/`` folder of a run of CASE (the held net). ``plot``
+draws each headline's deviation from the finest segment-law point of its case against the piece
+length (log axis); fins that take less than 2 % of their case's total fin impulse are skipped
+(their relative scatter says nothing about the headlines). Results: docs/collide_convergence.md.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import os
+import platform
+import time
+from pathlib import Path
+
+logging.basicConfig(level=logging.WARNING)
+
+
+def run(args) -> None:
+    from flexnet_fe.study.collide import simulate_case
+    from flexnet_fe.study.scenes import FULL_COLLIDE, case_with
+
+    for piece in args.pieces:
+        ov = FULL_COLLIDE + (f"collide.fin_piece_length={piece}", f"net.damping_law={args.law}") + tuple(args.set)
+        case = case_with(Path(args.case), ov)
+        c0, w0, load = time.process_time(), time.perf_counter(), os.getloadavg()[0]
+        _, _, res = simulate_case(case, Path(args.deploy))
+        s = res.summary
+        row = {"case": Path(args.case).name, "law": args.law, "piece_m": piece, "overrides": list(args.set),
+               "dv_over_v": s["dv_over_v"], "peak_accel_mps2": s["peak_accel_mps2"],
+               "fin_impulse_ns": dict(s["fin_impulse_ns"]), "duration_s": s["duration_s"],
+               "passed_through": s.get("passed_through"), "energy_error_rel": s["energy_error_rel"],
+               "steps": s["steps"], "dt_s": s["dt_s"], "warnings": len(s["warnings"]),
+               "wall_s": time.perf_counter() - w0, "cpu_s": time.process_time() - c0, "load_1min": load,
+               "machine": f"{platform.node()} {os.cpu_count()} cores", "date": time.strftime("%Y-%m-%d")}
+        with open(args.out, "a") as fh:
+            fh.write(json.dumps(row) + "\n")
+        print(json.dumps(row), flush=True)
+
+
+def _series(rows: list[dict]) -> dict[str, list[tuple[float, float]]]:
+    """Headline name -> [(piece [mm], value)] of one case and law, sorted by piece."""
+    out: dict[str, list[tuple[float, float]]] = {}
+    total = sum(rows[0]["fin_impulse_ns"].values())
+    for r in sorted(rows, key=lambda r: r["piece_m"]):
+        mm = 1e3 * r["piece_m"]
+        out.setdefault("Δv", []).append((mm, r["dv_over_v"]))
+        out.setdefault("CFC peak", []).append((mm, r["peak_accel_mps2"]))
+        for fin, imp in r["fin_impulse_ns"].items():
+            if rows[0]["fin_impulse_ns"][fin] >= 0.02 * total:
+                out.setdefault(fin, []).append((mm, imp))
+    return out
+
+
+def plot(args) -> None:
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    rows = [json.loads(line) for line in open(args.jsonl) if line.strip()]
+    cases = sorted({r["case"] for r in rows})
+    fig, axes = plt.subplots(1, len(cases), figsize=(5.2 * len(cases), 4.4), squeeze=False, sharey=True)
+    colours = {"Δv": "black", "CFC peak": "tab:red"}
+    fin_colours = plt.get_cmap("tab10").colors
+    for ax, case in zip(axes[0], cases):
+        seg = [r for r in rows if r["case"] == case and r["law"] == "segment"]
+        ref = min(seg, key=lambda r: r["piece_m"])
+        ref_series = _series([ref] + [r for r in seg if r is not ref])
+        for law, style in (("segment", "-o"), ("material", "--s")):
+            mine = [r for r in rows if r["case"] == case and r["law"] == law]
+            if not mine:
+                continue
+            for q, (name, pts) in enumerate(_series(mine).items()):
+                if name not in ref_series:
+                    continue
+                ref_v = dict(ref_series[name])[1e3 * ref["piece_m"]]
+                colour = colours.get(name, fin_colours[q % 10])
+                ax.semilogx([p for p, _ in pts], [100 * (v / ref_v - 1) for _, v in pts], style, color=colour,
+                            ms=4, lw=1.2, label=name if law == "segment" else None)
+        ax.axhspan(-2, 2, color="0.9", zorder=0)
+        ax.set_xticks([0.175, 0.35, 0.7, 1.4])
+        ax.set_xticklabels(["0.175", "0.35", "0.7", "1.4"])
+        ax.set_title(f"{case} (ref: segment law, {1e3 * ref['piece_m']:g} mm)", fontsize=9)
+        ax.set_xlabel("fin_piece_length [mm]")
+        ax.grid(True, which="both", lw=0.3)
+        ax.legend(fontsize=7, ncol=2)
+    axes[0][0].set_ylabel("deviation from the finest point [%] (grey: ±2 %; dashed: material law)")
+    fig.tight_layout()
+    fig.savefig(args.png, dpi=110)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    sub = ap.add_subparsers(dest="cmd", required=True)
+    r = sub.add_parser("run")
+    r.add_argument("case")
+    r.add_argument("deploy")
+    r.add_argument("out")
+    r.add_argument("--pieces", type=float, nargs="+", default=[1.4e-3, 0.7e-3, 0.35e-3])
+    r.add_argument("--law", choices=("segment", "material"), default="segment")
+    r.add_argument("--set", action="append", default=[])
+    p = sub.add_parser("plot")
+    p.add_argument("jsonl")
+    p.add_argument("png")
+    args = ap.parse_args()
+    run(args) if args.cmd == "run" else plot(args)
+
+
+if __name__ == "__main__":
+    main()
