@@ -5,13 +5,15 @@ cost side by side; and the chart of docs/img/collide_rope_resolution.png.
     PYTHONPATH=. .venv/bin/python benchmarks/collide_rope_resolution.py run CASE DEPLOY_DIR OUT.jsonl \
         [--pieces 1.4e-3 0.7e-3 0.35e-3] [--law segment] [--set KEY=VALUE ...]
     PYTHONPATH=. .venv/bin/python benchmarks/collide_rope_resolution.py plot OUT.jsonl PNG
+    PYTHONPATH=. .venv/bin/python benchmarks/collide_rope_resolution.py table OUT.jsonl
 
 ``run`` appends one JSON row per point to OUT.jsonl (case, law, piece [m], Δv/v, CFC peak [m/s²],
 per-fin impulse [N s], contact duration [s], energy error, steps, dt [s], wall and CPU [s], the
 machine's load); DEPLOY_DIR is the ``deploy/`` folder of a run of CASE (the held net). ``plot``
 draws each headline's deviation from the finest segment-law point of its case against the piece
 length (log axis); fins that take less than 2 % of their case's total fin impulse are skipped
-(their relative scatter says nothing about the headlines). Results: docs/collide_convergence.md.
+(their relative scatter says nothing about the headlines). ``table`` prints the rows as the Markdown
+table of docs/collide_convergence.md. Results: docs/collide_convergence.md.
 """
 from __future__ import annotations
 
@@ -99,6 +101,28 @@ def plot(args) -> None:
     fig.savefig(args.png, dpi=110)
 
 
+def _fins(impulse: dict[str, float], kind: str) -> str:
+    """The impulses [N s] of fins ``kind``_1..4, 0 where a fin took none."""
+    return " ".join(f"{impulse.get(f'{kind}_{i}', 0.0):.3f}" for i in range(1, 5))
+
+
+def table(args) -> None:
+    """Print OUT.jsonl as a Markdown table, one row per run in file order."""
+    print("| case, law, fin pieces | Δv/v | CFC peak [m/s²] | wings 1–4 [N s] | rudders 1–4 [N s] "
+          "| contact over | energy error | steps (dt) | CPU (wall, load) |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    for line in open(args.jsonl):
+        if not line.strip():
+            continue
+        r = json.loads(line)
+        imp = r["fin_impulse_ns"]
+        steps = f"{r['steps']:_}".replace("_", " ")
+        print(f"| {r['case']}, {r['law']}, {1e3 * r['piece_m']:g} mm | {r['dv_over_v']:.4e} "
+              f"| {r['peak_accel_mps2']:.2f} | {_fins(imp, 'wing')} | {_fins(imp, 'rudder')} | {1e3 * r['duration_s']:.1f} ms "
+              f"| {100 * r['energy_error_rel']:.3f} % | {steps} ({r['dt_s']:.2e} s) "
+              f"| {r['cpu_s']:.0f} s ({r['wall_s']:.0f} s, {r['load_1min']:.1f}) |")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     sub = ap.add_subparsers(dest="cmd", required=True)
@@ -112,8 +136,10 @@ def main() -> None:
     p = sub.add_parser("plot")
     p.add_argument("jsonl")
     p.add_argument("png")
+    t = sub.add_parser("table")
+    t.add_argument("jsonl")
     args = ap.parse_args()
-    run(args) if args.cmd == "run" else plot(args)
+    {"run": run, "plot": plot, "table": table}[args.cmd](args)
 
 
 if __name__ == "__main__":
