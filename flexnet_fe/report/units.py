@@ -89,14 +89,15 @@ SUFFIX_UNITS: dict[str, Unit] = {
 """Key suffix → unit (the stored value is SI; ``_pa`` is shown in MPa)."""
 
 COUNT_KEYS = frozenset({"steps", "dofs", "contacts", "snapshots", "iterations", "nodes", "cells",
-                        "segments", "fins", "events", "samples"})
+                        "segments", "fins", "events", "samples", "workers",
+                        "rope_split"})                 # pieces per rope segment near the path
 """Last key segments that are counts."""
 
 COUNT_SUFFIXES = ("_nodes", "_segments", "_crossings", "_unresolved", "_steps", "_count", "_frames")
 """Suffixes of counts (``free_nodes``, ``segment_crossings_unresolved``)."""
 
 RATIO_PATTERNS = ("_over_", "_ratio", "_fraction", "_factor", "_scale", "damage", "effectiveness",
-                  "multipliers", "_zeta", "efficiency", "remaining")
+                  "multipliers", "_zeta", "efficiency", "remaining", "_share", "restitution")
 """Substrings of dimensionless keys (``dv_over_v``, ``peak_over_yield``, ``rotary_inertia_scale``)."""
 
 BOOLEAN_KEYS = frozenset({"passed_through", "hit", "tunnelling", "tunnelled", "captured", "converged"})

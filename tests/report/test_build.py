@@ -273,3 +273,22 @@ def test_failed_shell_stage_partial_pictures_labelled(run_dir):
     assert "Stress pictures per fin (files of a stage that is not complete)" in html
     assert "Stage <b>shell</b> FAILED: NumericalError: energy growth" in html
     assert 'id="overall">Fin strength: INCOMPLETE' in html
+
+
+def test_envelope_maximum_is_checked_against_the_peak_with_load_zones(tmp_path):
+    """The envelope holds every cell, the St-Venant zones around the loads included, so its
+    maximum must equal the summary's peak_von_mises_with_load_zones_pa, not the structural peak
+    outside those zones (reference: shell.stage writes both; a real run's envelope maximum equals
+    the former to round-off). A mismatch with the former is still reported."""
+    from types import SimpleNamespace
+
+    from flexnet_fe.report.figures import _fin_caption
+
+    run = SimpleNamespace(run_dir=tmp_path)
+    result = {"max_pa": 75.2e6, "png": str(tmp_path / "wing_1.png"), "field": "von_mises_pa"}
+    res = {"peak_von_mises_pa": 26.1e6, "peak_von_mises_with_load_zones_pa": 75.2e6}
+    notes: list[str] = []
+    _fin_caption(run, "wing_1", res, "envelope", result, notes)
+    assert notes == []
+    _fin_caption(run, "wing_1", dict(res, peak_von_mises_with_load_zones_pa=80e6), "envelope", result, notes)
+    assert len(notes) == 1 and "peak_von_mises_with_load_zones_pa" in notes[0]
