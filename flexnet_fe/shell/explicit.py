@@ -293,10 +293,11 @@ class Sample:
     kinetic: float
     """½ vᵀ M v with the half-step velocity [J]"""
     strain: float
-    """½ uᵀ K u [J]"""
+    """½ u_nᵀ K u_{n−1} (β = 0; ½ uᵀ K u at the start and when β ≠ 0) [J]"""
     work: float
-    """accumulated external work Σ f·Δu since t = 0, signed [J] (the instability guard uses
-    Σ over sample intervals of |Σ_steps f·Δu| internally, an upper bound)"""
+    """accumulated external work Σ ½ dt f_k·(v_{k−½} + v_{k+½}) since the start, signed [J]:
+    kinetic + strain − work is constant to round-off when undamped (kernel.advance_steps; the
+    instability guard uses Σ over sample intervals of |interval work| internally, an upper bound)"""
     row: bool = True
     """False at the extra instants of ``peak_every`` (u, v, t valid; energies and work NaN)"""
 
@@ -304,7 +305,8 @@ class Sample:
 @njit(cache=True)
 def _update(u, v, fe, fi, N, coef):
     """Central-difference update over the owned nodes (:func:`node_update`; N a
-    :class:`NodeData`, coef = (h, dt, α)); returns the external work of the step, f_ext·Δu [J]."""
+    :class:`NodeData`, coef = (h, dt, α)); returns the external work of the step,
+    ½ dt f_ext·(v_{n−½} + v_{n+½}) [J]."""
     work = 0.0
     f5 = np.empty(5)
     for i in range(N.wfix.size):
@@ -350,8 +352,10 @@ def central_difference(op: ShellOperator, loads: LoadHistory, dt: float, n_steps
     constrain(op, u)  # fixed DOFs start (and stay) at zero, w = 0 at simply supported nodes
     constrain(op, v)
 
-    def energies() -> tuple[float, float]:
-        K.mult(uv, fiv)
+    def energies(cross: bool = False) -> tuple[float, float]:
+        """(½vᵀMv, ½u_nᵀKu_{n−1} from the step's product if ``cross`` else ½uᵀKu) [J]."""
+        if not cross:
+            K.mult(uv, fiv)
         ke = 0.5 * float(v @ (mass * v))
         se = 0.5 * float(u @ fi)
         tot = np.empty(2)
@@ -372,12 +376,12 @@ def central_difference(op: ShellOperator, loads: LoadHistory, dt: float, n_steps
         else:
             K.mult(uv, fiv)
         loads.evaluate(t, fe)
-        # f_ext · Δu summed every step, so load pulses shorter than a sample interval count too.
+        # ½ dt f_ext·(v_{n−½} + v_{n+½}) every step: load pulses shorter than a sample count too
         h = 0.5 * dt if step == start_step + 1 else dt
         work_local += _update(u, v, fe, fi, nodes, (h, dt, alpha))
         if step % sample_every == 0 or step == last:
             tn = step * dt
-            ke, se = energies()
+            ke, se = energies(cross=not beta)
             w_int = comm.allreduce(work_local, op=MPI.SUM)
             work += abs(w_int)
             work_net += w_int
