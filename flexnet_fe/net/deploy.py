@@ -103,7 +103,8 @@ def hub_nodes_inside(model: NetModel, state: NetState) -> np.ndarray:
 HISTORY_COLUMNS = (
     "t_s", "area_m2", "area_loop_m2", "mass_speed_rel_mps", "mass_speed_mps", "max_tension_n",
     "mass_rope_tension_n", "peak_tension_interval_n", "hub_spin_radps", "hub_wrap_max_rad", "com_speed_z_mps",
-    "kinetic_energy_rel_j", "elastic_energy_j", "dt_s", "dt_drag_limit_s", "drag_number")
+    "kinetic_energy_rel_j", "elastic_energy_j", "dissipated_rope_j", "air_work_rel_j", "dt_s", "dt_drag_limit_s",
+    "drag_number")
 """Columns of the deploy ``history.csv`` (units in the names)."""
 
 
@@ -149,6 +150,8 @@ class _Recorder:
         e = energies(model, state)
         cols["kinetic_energy_rel_j"][k] = e["kinetic"] - 0.5 * mtot * float(vcom @ vcom)  # about the CoM
         cols["elastic_energy_j"][k] = e["elastic"]
+        cols["dissipated_rope_j"][k] = state.losses[0]  # since t = 0 (net.kernels.advance)
+        cols["air_work_rel_j"][k] = state.losses[1]
         cols["dt_drag_limit_s"][k] = drag_limit(model, x, v, self.env.rho)
         if k in self.shape_ks:
             self.shapes.append((state.t, x[:, :2].copy()))

@@ -56,13 +56,15 @@ class DeployModel(NamedTuple):
 class DeployState(NamedTuple):
     """What the deploy kernel changes in place: x, v (n, 3) [m], [m/s]; hub (2,) = (θ [rad],
     ω [rad/s]); wrap (m,) wound angle of each hub link [rad]; tension (m,) [N] of the last force
-    evaluation."""
+    evaluation; losses (2,) [J], accumulated by :func:`advance`: (dissipated by the rope
+    dashpots, work of the air on the motion about the centre of mass)."""
 
     x: np.ndarray
     v: np.ndarray
     hub: np.ndarray
     wrap: np.ndarray
     tension: np.ndarray
+    losses: np.ndarray
 
 
 @njit(cache=True, inline="always")
@@ -82,9 +84,11 @@ def _segment_air(model, v, s, ends, u, lf, vi, lam):
 
 
 @njit(cache=True, error_model="numpy")
-def _rope_forces(model, state, f, lam):
+def _rope_forces(model, state, f, lam, vcom):
     """Adds the tensions (Eq. 1–4) and, with air, the aerodynamics (Eq. 5–10) of every segment
-    that is not a hub link to f (n, 3) [N]; writes their tension (m,) [N]. Returns the largest.
+    that is not a hub link to f (n, 3) [N]; writes their tension (m,) [N]. Returns (the largest
+    tension [N], the dashpots' dissipation rate Σ (T − K s) l̇ [W], the air's power on the
+    motion about the centre of mass moving at vcom (3,) [W]), at the step's (lagged) velocities.
 
     The hot loop of the deploy stage: one pass over the segments, node indices unsigned (no
     negative-index wrap test), no allocation, no branch but the slack test inside the law."""
@@ -99,6 +103,8 @@ def _rope_forces(model, state, f, lam):
     offset = model.offset
     air = model.air
     tmax = 0.0
+    p_diss = 0.0
+    p_air = 0.0
     for s in range(springs.shape[0]):
         if hub_link[s]:
             continue
@@ -110,24 +116,31 @@ def _rope_forces(model, state, f, lam):
             (rest[s], stiffness[s], damping[s], offset[s]))
         tension[s] = t
         tmax = max(tmax, t)
+        p_diss += (t - stiffness[s] * max(stretch, 0.0)) * ldot
         a0 = a1 = a2 = 0.0
         if air and lf != 0.0:
             a0, a1, a2 = _segment_air(model, v, s, (i, j), (u0, u1, u2), lf, (v[i, 0], v[i, 1], v[i, 2]), lam)
+            p_air += (a0 * (v[i, 0] + v[j, 0] - 2.0 * vcom[0]) + a1 * (v[i, 1] + v[j, 1] - 2.0 * vcom[1])
+                      + a2 * (v[i, 2] + v[j, 2] - 2.0 * vcom[2]))
         f[i, 0] += t * u0 + a0; f[i, 1] += t * u1 + a1; f[i, 2] += t * u2 + a2
         f[j, 0] += a0 - t * u0; f[j, 1] += a1 - t * u1; f[j, 2] += a2 - t * u2
-    return tmax
+    return tmax, p_diss, p_air
 
 
 @njit(cache=True, error_model="numpy")
-def _hub_link_forces(model, state, f, lam):
+def _hub_link_forces(model, state, f, lam, vcom):
     """Adds the forces of the hub links (Eq. 12–19: rim point, wrap, tension, air) to f (n, 3)
     [N]; updates their wrap (m,) [rad] and tension (m,) [N]. Returns (torque about +z on the
-    hub [N m], largest hub-link tension [N])."""
+    hub [N m], largest hub-link tension [N], dashpot dissipation rate [W], air power on the
+    motion about the centre of mass moving at vcom (3,) [W]); as :func:`_rope_forces`, with l̇
+    the rate of the straight part (the wound part's rate is not in the dashpot, Eq. 12–19)."""
     x = state.x
     v = state.v
     hub = model.hub
     torque = 0.0
     tmax = 0.0
+    p_diss = 0.0
+    p_air = 0.0
     pt = np.empty(3)
     vt = np.empty(3)
     for s in model.links:
@@ -139,6 +152,7 @@ def _hub_link_forces(model, state, f, lam):
             model.r0 * abs(w), (model.rest[s], model.stiffness[s], model.damping[s], model.offset[s]))
         state.tension[s] = t
         tmax = max(tmax, t)
+        p_diss += (t - model.stiffness[s] * max(stretch, 0.0)) * ldot
         f[hub, 0] += t * u0; f[hub, 1] += t * u1; f[hub, 2] += t * u2
         f[j, 0] -= t * u0; f[j, 1] -= t * u1; f[j, 2] -= t * u2
         # lever arm of the rim point: (T - c) x (t u), z component (Eq. 12-13)
@@ -147,7 +161,9 @@ def _hub_link_forces(model, state, f, lam):
             a0, a1, a2 = _segment_air(model, v, s, (hub, j), (u0, u1, u2), lf, (vt[0], vt[1], vt[2]), lam)
             f[hub, 0] += a0; f[hub, 1] += a1; f[hub, 2] += a2
             f[j, 0] += a0; f[j, 1] += a1; f[j, 2] += a2
-    return torque, tmax
+            p_air += (a0 * (v[hub, 0] + v[j, 0] - 2.0 * vcom[0]) + a1 * (v[hub, 1] + v[j, 1] - 2.0 * vcom[1])
+                      + a2 * (v[hub, 2] + v[j, 2] - 2.0 * vcom[2]))
+    return torque, tmax, p_diss, p_air
 
 
 @njit(cache=True)
@@ -170,8 +186,9 @@ def net_forces(model, state, f, lam):
     derivative Σ_s ½ ρ C_max d l |v_s| (the caller divides by m).
     """
     _weights(model, f)
-    tmax = _rope_forces(model, state, f, lam)
-    torque, tlink = _hub_link_forces(model, state, f, lam)
+    vcom = np.zeros(3)
+    tmax, _, _ = _rope_forces(model, state, f, lam, vcom)
+    torque, tlink, _, _ = _hub_link_forces(model, state, f, lam, vcom)
     return torque, max(tmax, tlink)
 
 
@@ -183,6 +200,9 @@ def advance(model, state, n_steps, dt):
 
     Returns (largest segment tension seen during the call [N], largest drag stability number
     λ dt, λ = drag velocity-derivative bound / m; the lagged-velocity update needs λ dt <= 2).
+    Adds to ``state.losses`` (2,) [J] the dashpots' dissipation and the air's work on the motion
+    about the centre of mass, each booked as its power at the step's lagged velocities × dt (a
+    left sum, first order in dt, as the collide kernel's rope dashpots).
     """
     x = state.x
     v = state.v
@@ -196,10 +216,19 @@ def advance(model, state, n_steps, dt):
     _weights(model, f)
     peak = 0.0
     drag_number = 0.0
+    inv_m = 1.0 / mass.sum()
+    vcom = np.zeros(3)
+    for i in range(n):
+        for k in range(3):
+            vcom[k] += mass[i] * v[i, k] * inv_m
+    losses = state.losses
     for step in range(n_steps):
-        tmax = _rope_forces(model, state, f, lam)
-        torque, tlink = _hub_link_forces(model, state, f, lam)
+        tmax, p_diss, p_air = _rope_forces(model, state, f, lam, vcom)
+        torque, tlink, q_diss, q_air = _hub_link_forces(model, state, f, lam, vcom)
         peak = max(peak, tmax, tlink)
+        losses[0] += dt * (p_diss + q_diss)
+        losses[1] += dt * (p_air + q_air)
+        vcom[0] = vcom[1] = vcom[2] = 0.0
         for i in range(n):  # update, and reset f to the weights for the next step
             a = dt / mass[i]
             if lam[i] != 0.0:
@@ -211,6 +240,8 @@ def advance(model, state, n_steps, dt):
             x[i, 0] += dt * v[i, 0]
             x[i, 1] += dt * v[i, 1]
             x[i, 2] += dt * v[i, 2]
+            w = mass[i] * inv_m
+            vcom[0] += w * v[i, 0]; vcom[1] += w * v[i, 1]; vcom[2] += w * v[i, 2]
             f[i, 0] = mass[i] * g0
             f[i, 1] = mass[i] * g1
             f[i, 2] = mass[i] * g2

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from numba import njit
@@ -18,7 +18,9 @@ from flexnet_fe.net.topology import NetModel
 @dataclass
 class NetState:
     """t [s]; x, v (n, 3) [m], [m/s]; hub = (θ [rad], ω [rad/s]) (2,); wrap (m,) wound angle of
-    each hub link [rad]; tension (m,) [N] at the last force evaluation."""
+    each hub link [rad]; tension (m,) [N] at the last force evaluation; losses (2,) [J] since
+    t = 0: (energy dissipated by the rope dashpots, work of the air on the motion about the
+    centre of mass) — the terms that close the energy balance (``net.kernels.advance``)."""
 
     t: float
     x: np.ndarray
@@ -26,6 +28,7 @@ class NetState:
     hub: np.ndarray
     wrap: np.ndarray
     tension: np.ndarray
+    losses: np.ndarray = field(default_factory=lambda: np.zeros(2))
 
 
 @dataclass(frozen=True)
@@ -59,7 +62,8 @@ def kernel_model(model: NetModel, env: Environment) -> DeployModel:
 def kernel_state(state: NetState, wrap: np.ndarray | None = None) -> DeployState:
     """The deploy kernel's view of ``state`` (same arrays: the kernel changes them in place);
     ``wrap`` replaces ``state.wrap`` when given."""
-    return DeployState(state.x, state.v, state.hub, state.wrap if wrap is None else wrap, state.tension)
+    return DeployState(state.x, state.v, state.hub, state.wrap if wrap is None else wrap, state.tension,
+                       state.losses)
 
 
 def step_many(model: NetModel, state: NetState, env: Environment, dt: float, n_steps: int,

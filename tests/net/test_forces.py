@@ -20,7 +20,7 @@ def production_forces(x, v, springs, rest, k, c, diameter, air=False, wind=(0.0,
                         np.full(m, diameter), np.zeros(m, np.bool_), np.zeros(0, np.int64), np.zeros(m), np.ones(n),
                         -1, 0.1, 0.01, 1.0, np.zeros(3),
                         float(rho), np.asarray(wind, float), air)
-    state = DeployState(np.asarray(x, float), np.asarray(v, float), np.zeros(2), np.zeros(m), t)
+    state = DeployState(np.asarray(x, float), np.asarray(v, float), np.zeros(2), np.zeros(m), t, np.zeros(2))
     net_forces(model, state, f, np.zeros(n))
     return f, t
 
