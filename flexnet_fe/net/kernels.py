@@ -84,11 +84,11 @@ def _segment_air(model, v, s, ends, u, lf, vi, lam):
 
 
 @njit(cache=True, error_model="numpy")
-def _rope_forces(model, state, f, lam, vcom):
+def _rope_forces(model, state, f, lam, fa):
     """Adds the tensions (Eq. 1–4) and, with air, the aerodynamics (Eq. 5–10) of every segment
-    that is not a hub link to f (n, 3) [N]; writes their tension (m,) [N]. Returns (the largest
-    tension [N], the dashpots' dissipation rate Σ (T − K s) l̇ [W], the air's power on the
-    motion about the centre of mass moving at vcom (3,) [W]), at the step's (lagged) velocities.
+    that is not a hub link to f (n, 3) [N], the aerodynamics also to fa (n, 3) [N]; writes their
+    tension (m,) [N]. Returns (the largest tension [N], the dashpots' dissipation rate
+    Σ (T − K s) l̇ [W] at the step's lagged velocities).
 
     The hot loop of the deploy stage: one pass over the segments, node indices unsigned (no
     negative-index wrap test), no allocation, no branch but the slack test inside the law."""
@@ -104,7 +104,6 @@ def _rope_forces(model, state, f, lam, vcom):
     air = model.air
     tmax = 0.0
     p_diss = 0.0
-    p_air = 0.0
     for s in range(springs.shape[0]):
         if hub_link[s]:
             continue
@@ -120,27 +119,26 @@ def _rope_forces(model, state, f, lam, vcom):
         a0 = a1 = a2 = 0.0
         if air and lf != 0.0:
             a0, a1, a2 = _segment_air(model, v, s, (i, j), (u0, u1, u2), lf, (v[i, 0], v[i, 1], v[i, 2]), lam)
-            p_air += (a0 * (v[i, 0] + v[j, 0] - 2.0 * vcom[0]) + a1 * (v[i, 1] + v[j, 1] - 2.0 * vcom[1])
-                      + a2 * (v[i, 2] + v[j, 2] - 2.0 * vcom[2]))
+            fa[i, 0] += a0; fa[i, 1] += a1; fa[i, 2] += a2
+            fa[j, 0] += a0; fa[j, 1] += a1; fa[j, 2] += a2
         f[i, 0] += t * u0 + a0; f[i, 1] += t * u1 + a1; f[i, 2] += t * u2 + a2
         f[j, 0] += a0 - t * u0; f[j, 1] += a1 - t * u1; f[j, 2] += a2 - t * u2
-    return tmax, p_diss, p_air
+    return tmax, p_diss
 
 
 @njit(cache=True, error_model="numpy")
-def _hub_link_forces(model, state, f, lam, vcom):
+def _hub_link_forces(model, state, f, lam, fa):
     """Adds the forces of the hub links (Eq. 12–19: rim point, wrap, tension, air) to f (n, 3)
-    [N]; updates their wrap (m,) [rad] and tension (m,) [N]. Returns (torque about +z on the
-    hub [N m], largest hub-link tension [N], dashpot dissipation rate [W], air power on the
-    motion about the centre of mass moving at vcom (3,) [W]); as :func:`_rope_forces`, with l̇
-    the rate of the straight part (the wound part's rate is not in the dashpot, Eq. 12–19)."""
+    [N], their air loads also to fa (n, 3) [N]; updates their wrap (m,) [rad] and tension (m,)
+    [N]. Returns (torque about +z on the hub [N m], largest hub-link tension [N], dashpot
+    dissipation rate [W]); as :func:`_rope_forces`, with l̇ the rate of the straight part (the
+    wound part's rate is not in the dashpot, Eq. 12–19)."""
     x = state.x
     v = state.v
     hub = model.hub
     torque = 0.0
     tmax = 0.0
     p_diss = 0.0
-    p_air = 0.0
     pt = np.empty(3)
     vt = np.empty(3)
     for s in model.links:
@@ -161,9 +159,9 @@ def _hub_link_forces(model, state, f, lam, vcom):
             a0, a1, a2 = _segment_air(model, v, s, (hub, j), (u0, u1, u2), lf, (vt[0], vt[1], vt[2]), lam)
             f[hub, 0] += a0; f[hub, 1] += a1; f[hub, 2] += a2
             f[j, 0] += a0; f[j, 1] += a1; f[j, 2] += a2
-            p_air += (a0 * (v[hub, 0] + v[j, 0] - 2.0 * vcom[0]) + a1 * (v[hub, 1] + v[j, 1] - 2.0 * vcom[1])
-                      + a2 * (v[hub, 2] + v[j, 2] - 2.0 * vcom[2]))
-    return torque, tmax, p_diss, p_air
+            fa[hub, 0] += a0; fa[hub, 1] += a1; fa[hub, 2] += a2
+            fa[j, 0] += a0; fa[j, 1] += a1; fa[j, 2] += a2
+    return torque, tmax, p_diss
 
 
 @njit(cache=True)
@@ -186,9 +184,9 @@ def net_forces(model, state, f, lam):
     derivative Σ_s ½ ρ C_max d l |v_s| (the caller divides by m).
     """
     _weights(model, f)
-    vcom = np.zeros(3)
-    tmax, _, _ = _rope_forces(model, state, f, lam, vcom)
-    torque, tlink, _, _ = _hub_link_forces(model, state, f, lam, vcom)
+    fa = np.zeros(f.shape)
+    tmax, _ = _rope_forces(model, state, f, lam, fa)
+    torque, tlink, _ = _hub_link_forces(model, state, f, lam, fa)
     return torque, max(tmax, tlink)
 
 
@@ -200,9 +198,11 @@ def advance(model, state, n_steps, dt):
 
     Returns (largest segment tension seen during the call [N], largest drag stability number
     λ dt, λ = drag velocity-derivative bound / m; the lagged-velocity update needs λ dt <= 2).
-    Adds to ``state.losses`` (2,) [J] the dashpots' dissipation and the air's work on the motion
-    about the centre of mass, each booked as its power at the step's lagged velocities × dt (a
-    left sum, first order in dt, as the collide kernel's rope dashpots).
+    Adds to ``state.losses`` (2,) [J] the dashpots' dissipation, booked as its power at the
+    step's lagged velocities × dt (a left sum, first order in dt, as the collide kernel's rope
+    dashpots), and the air's work on the motion about the centre of mass, booked exactly: the
+    step changes that kinetic energy by Σ F_i·(v̄_i − v̄_c) dt, v̄ the mean of the velocities
+    before and after it, and the weights' share of that sum is zero.
     """
     x = state.x
     v = state.v
@@ -212,39 +212,46 @@ def advance(model, state, n_steps, dt):
     g2 = model.gravity[2]
     n = x.shape[0]
     f = np.empty((n, 3))
+    fa = np.zeros((n, 3))
     lam = np.zeros(n)
     _weights(model, f)
     peak = 0.0
     drag_number = 0.0
     inv_m = 1.0 / mass.sum()
-    vcom = np.zeros(3)
-    for i in range(n):
-        for k in range(3):
-            vcom[k] += mass[i] * v[i, k] * inv_m
     losses = state.losses
+    fa_sum = np.zeros(3)               # Σ fa_i
+    vc_sum = np.zeros(3)               # Σ m_i (v_old + v_new)_i
     for step in range(n_steps):
-        tmax, p_diss, p_air = _rope_forces(model, state, f, lam, vcom)
-        torque, tlink, q_diss, q_air = _hub_link_forces(model, state, f, lam, vcom)
+        tmax, p_diss = _rope_forces(model, state, f, lam, fa)
+        torque, tlink, q_diss = _hub_link_forces(model, state, f, lam, fa)
         peak = max(peak, tmax, tlink)
         losses[0] += dt * (p_diss + q_diss)
-        losses[1] += dt * (p_air + q_air)
-        vcom[0] = vcom[1] = vcom[2] = 0.0
+        w_air = 0.0                    # Σ fa_i · (v_old + v_new)_i
+        fa_sum[:] = 0.0
+        vc_sum[:] = 0.0
         for i in range(n):  # update, and reset f to the weights for the next step
             a = dt / mass[i]
             if lam[i] != 0.0:
                 drag_number = max(drag_number, lam[i] * a)
                 lam[i] = 0.0
+            if model.air:
+                for k in range(3):
+                    w_air += fa[i, k] * (2.0 * v[i, k] + a * f[i, k])
+                    fa_sum[k] += fa[i, k]
+                    vc_sum[k] += mass[i] * (2.0 * v[i, k] + a * f[i, k])
+                    fa[i, k] = 0.0
             v[i, 0] += a * f[i, 0]
             v[i, 1] += a * f[i, 1]
             v[i, 2] += a * f[i, 2]
             x[i, 0] += dt * v[i, 0]
             x[i, 1] += dt * v[i, 1]
             x[i, 2] += dt * v[i, 2]
-            w = mass[i] * inv_m
-            vcom[0] += w * v[i, 0]; vcom[1] += w * v[i, 1]; vcom[2] += w * v[i, 2]
             f[i, 0] = mass[i] * g0
             f[i, 1] = mass[i] * g1
             f[i, 2] = mass[i] * g2
+        if model.air:
+            losses[1] += 0.5 * dt * (w_air - inv_m * (fa_sum[0] * vc_sum[0] + fa_sum[1] * vc_sum[1]
+                                                      + fa_sum[2] * vc_sum[2]))
         if model.hub >= 0:
             state.hub[1] += dt * torque / model.hub_inertia
             state.hub[0] += dt * state.hub[1]

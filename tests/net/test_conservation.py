@@ -97,10 +97,11 @@ def _balance_gap(env, frac, flight=(0.0, 0.0, 0.0)):
 def test_rope_dashpots_and_air_close_the_deploy_energy_balance():
     """Reference: the work–energy theorem. The history's dissipated_rope_j (Σ (T − K s) l̇ dt,
     net.kernels.advance) and air_work_rel_j (the air's work on the motion about the centre of
-    mass) close kinetic + elastic energy to first order in dt: both are booked at the step's
-    lagged velocity (a left sum), so the gap must halve with dt (ratio 2 ± 15 %). Measured: damped
-    net without air 0.84 / 0.42 % at 0.2 / 0.1 dt_crit (without the dissipated column: 9–10 %);
-    with air at 300 m/s 17 / 8 % of the air's work, the drag's work dominating the energy."""
+    mass) close kinetic + elastic energy. The air's work is booked exactly (at the step's mean
+    velocities), the dashpots' at the lagged velocity (a left sum), so the gap is first order in
+    dt and must halve with it (ratio 2 ± 15 %). Measured: damped net without air 0.84 / 0.42 % at
+    0.2 / 0.1 dt_crit (without the dissipated column 9–10 %); with air at 300 m/s 1.24 / 0.58 %
+    (without the dissipated column 9.4 %)."""
     g1, g1_nod = _balance_gap(NO_LOADS, 0.2)
     g2, _ = _balance_gap(NO_LOADS, 0.1)
     assert g1 < 0.012 and g1_nod > 0.05, (g1, g1_nod)
@@ -108,5 +109,5 @@ def test_rope_dashpots_and_air_close_the_deploy_energy_balance():
     air = Environment(gravity=np.array([0.0, -9.81, 0.0]), rho=0.5258, wind=np.zeros(3), air=True)
     a1, a1_nod = _balance_gap(air, 0.2, (0.0, 0.0, 300.0))
     a2, _ = _balance_gap(air, 0.1, (0.0, 0.0, 300.0))
-    assert a1 < 0.25 and a1_nod > a1, (a1, a1_nod)
+    assert a1 < 0.02 and a1_nod > 0.05, (a1, a1_nod)
     assert 1.7 < a1 / a2 < 2.3, (a1, a2)
