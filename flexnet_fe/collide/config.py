@@ -98,6 +98,11 @@ class CollideConfig(Section):
     dt_safety: Fraction = Field(0.5, gt=0.0, description="time step = safety × stability limit of springs and contact [-]")
     pass_through_fraction: Fraction = Field(
         0.1, gt=0.0, description="travel per step: relative speed × dt ≤ this × min(rope radius, fin half-thickness) [-]")
+    far_net_ratio: int = Field(0, ge=0, le=4096, description=(
+        "the far net (segments that cannot touch the missile within a window) is stepped once per window of "
+        "this many contact steps, the near net every step (impulse method, collide.kernel 'Far net') [-]; "
+        "0 = automatic (the rope springs' stability limit, at most collide.simulate.FAR_RATIO_CAP); "
+        "1 = every segment every step"))
     crop: bool = Field(True, description="integrate only the net the impact can reach; hold the rest")
     crop_wave_speed_factor: Positive = Field(
         4.0, description="reach = factor × sqrt(E/ρ) × duration (+ margin) around the missile's swept footprint [-]")

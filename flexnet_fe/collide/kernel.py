@@ -49,6 +49,25 @@ per-pair gates (body: distance to the axis; fin: ``_fin_gap``) are supersets too
 fails a gate has no force, so every force, accumulator and contact slot is computed with the same
 arithmetic in the same order as with no broad phase (tests/collide/test_kernel_speedups.py).
 
+Far net (``advance(..., ratio)``; multiple time stepping, the impulse method of Grubmüller et al.
+1991 / r-RESPA, Tuckerman et al. 1992, with lazy positions as in asynchronous variational
+integrators, Lew et al. 2003). The step is set by the contact of the lightest rope pieces at the
+fins, ~1/300 of the rope springs' own limit, yet only the rope near the missile can touch it. Each
+call is cut into windows of ``ratio`` steps. At a window's start (``_far_window``) every node's
+largest speed relative to the missile's frame v_max gives the bound d = FAR_BOUND_FACTOR × v_max ×
+window; a live segment whose clearance exceeds d cannot touch any part within the window (the
+clearance is 1-Lipschitz in its ends' displacements, as for the candidate list) and is slow; the
+others are fast, and so are their nodes. The slow segments' forces (rope, air; and gravity on the
+slow nodes) act as one impulse of the whole window, window × F, at its start (their dissipation
+booked over the window); the slow nodes feel nothing else, so they move over the whole window at
+once, and the fast nodes take that impulse and then advance step by step with the fast segments'
+forces and the contacts. Momentum is exact (every impulse has its reaction); a slow spring's
+error is O(window) and is measured against single rate (tests/collide/test_far_net.py,
+docs/performance.md "Far net"). The bound is checked, not assumed: a node of a slow segment that
+moves farther than d from its position at the window's start (every step for the fast ones, at the
+window's end for the slow ones, whose motion in the window is a straight line) stops the call with
+FAR. ratio = 1 is the single-rate loop (every segment and node every step, no check).
+
 Call cost: a compiled call that passes the model, state and work records (≈ 50 arrays) costs
 ≈ 0.5 µs when LLVM does not inline it — more than the narrow phase of a capsule. The per-pair
 functions (``segment_contacts``, ``_apply``, ``_apply_to_node``, ``_tunnel``,
@@ -76,10 +95,10 @@ from numba import njit
 
 from flexnet_fe.collide.air import segment_air
 from flexnet_fe.collide.fpu import FTZ_DAZ, get_mxcsr, set_mxcsr
-from flexnet_fe.collide.model import (A_BROKEN, A_CROSS, A_DISS_CONTACT, A_DISS_FRICTION, A_DISS_ROPE, A_FCONTACT,
-                                      A_IMP_B, A_NBROKEN, A_NCONTACT, A_PEN, A_PEN_INT, A_PEN_RATIO, A_PHELD,
-                                      A_SKIPPED, A_TUN_PART, A_TUN_SPEED, A_TUN_STEP, A_WORK_GRAVITY, NONFINITE, OK,
-                                      TUNNEL)
+from flexnet_fe.collide.model import (A_BROKEN, A_CROSS, A_DISS_CONTACT, A_DISS_FRICTION, A_DISS_ROPE,
+                                      A_FAST_SEG_STEPS, A_FCONTACT, A_IMP_B, A_NBROKEN, A_NCONTACT, A_PEN,
+                                      A_PEN_INT, A_PEN_RATIO, A_PHELD, A_SKIPPED, A_TUN_PART, A_TUN_SPEED,
+                                      A_TUN_STEP, A_WORK_GRAVITY, FAR, NONFINITE, OK, TUNNEL)
 from flexnet_fe.collide.rigid_body import RigidBody, rigid_step
 from flexnet_fe.contact.law import approach_speed, contact_potential, friction_force, normal_force
 from flexnet_fe.missile.shapes import FIN_PART_OFFSET, segment_body_closest, segment_core_closest
@@ -126,7 +145,13 @@ class StepWork(NamedTuple):
     Dissipation at the step's mean velocity (``_book_mean_velocity``): fd [N] (n, 6) the contact
     damping (0:3) and friction (3:6) forces applied to each free node this step; md (12,) their
     reactions on the missile, W: damping force [N], torque about the CG [N m], friction force,
-    torque."""
+    torque.
+    Far-net windows (``_far_window``; module docstring, "Far net"): fseg (ns,) int64 the fast
+    segments (stepped every step), sseg (ns,) int64 the slow ones, fnode (n,) int64 the fast nodes
+    (nodes of fast segments), nlist (3,) int64 their counts (fast segments, slow segments, fast
+    nodes); isfast (n,) bool; pwin [m] (n, 3) node positions in B at the window's start; dfar [m]
+    (n,) how far each node whose motion the window's split relies on may move in B during the
+    window (inf: not checked). Single rate (ratio 1): every segment and node fast, dfar inf."""
 
     r: np.ndarray
     w_w: np.ndarray
@@ -143,6 +168,13 @@ class StepWork(NamedTuple):
     fin_rh: np.ndarray
     fd: np.ndarray
     md: np.ndarray
+    fseg: np.ndarray
+    sseg: np.ndarray
+    fnode: np.ndarray
+    nlist: np.ndarray
+    isfast: np.ndarray
+    pwin: np.ndarray
+    dfar: np.ndarray
 
 
 @njit(cache=True)
@@ -171,28 +203,36 @@ def _fin_half_spaces(model):
 @njit(cache=True)
 def _work(model, n):
     """The scratch of one call for ``n`` nodes; the candidate list is empty and every node's margin
-    0, so the first step builds it."""
+    0, so the first step builds it; every segment and node is fast (single rate)."""
     ns = model.seg.shape[0]
     return StepWork(np.eye(3), np.zeros(3), np.zeros((n, 3)), np.zeros(6), np.zeros((n, 3)), np.zeros(3),
                     np.zeros(3), np.zeros(ns, np.int64), np.zeros(2, np.int64), np.zeros((n, 3)), np.zeros(n),
-                    _fin_half_spaces(model), model.fin_half + model.rope_radius, np.zeros((n, 6)), np.zeros(12))
+                    _fin_half_spaces(model), model.fin_half + model.rope_radius, np.zeros((n, 6)), np.zeros(12),
+                    np.arange(ns), np.zeros(ns, np.int64), np.arange(n), np.array([ns, 0, n]),
+                    np.ones(n, np.bool_), np.zeros((n, 3)), np.full(n, np.inf))
 
 
 @njit(cache=True)
-def _to_body(model, state, wk):
-    """Node positions in B [m] into wk.pbn (n, 3); wk.r must hold the attitude. Returns True when
-    some node has moved (in B) by its margin since the candidate list was built (wk.pref,
-    wk.marg2): the list must then be rebuilt."""
-    r, pbn, pref, marg2 = wk.r, wk.pbn, wk.pref, wk.marg2
+def _to_body(model, state, wk, nodes, count):
+    """Positions in B [m] of the nodes ``nodes[:count]`` into wk.pbn (n, 3); wk.r must hold the
+    attitude. Returns (rebuild, far): rebuild True when one of them has moved (in B) by its margin
+    since the candidate list was built (wk.pref, wk.marg2): the list must then be rebuilt; far True
+    when one has moved farther from its position at the window's start (wk.pwin) than its bound
+    wk.dfar (``_far_window``)."""
+    r, pbn, pref, marg2, pwin, dfar = wk.r, wk.pbn, wk.pref, wk.marg2, wk.pwin, wk.dfar
     moved = False
-    for i in range(state.x.shape[0]):
+    far = False
+    for c in range(count):
+        i = nodes[c]
         b0, b1, b2 = _rtv(r, state.x[i, 0] - state.mx[0], state.x[i, 1] - state.mx[1], state.x[i, 2] - state.mx[2])
         pbn[i, 0] = b0 + model.cg_b[0]
         pbn[i, 1] = b1 + model.cg_b[1]
         pbn[i, 2] = b2 + model.cg_b[2]
         d0, d1, d2 = pbn[i, 0] - pref[i, 0], pbn[i, 1] - pref[i, 1], pbn[i, 2] - pref[i, 2]
         moved |= d0 * d0 + d1 * d1 + d2 * d2 >= marg2[i]
-    return moved
+        w0, w1, w2 = pbn[i, 0] - pwin[i, 0], pbn[i, 1] - pwin[i, 1], pbn[i, 2] - pwin[i, 2]
+        far |= w0 * w0 + w1 * w1 + w2 * w2 > dfar[i] * dfar[i]
+    return moved, far
 
 
 @njit(cache=True)
@@ -217,21 +257,23 @@ the missile's size), the proof below is in exact arithmetic."""
 
 
 @njit(cache=True)
-def _clearance(bb, rad, fin_pl, fin_rh, pa, pb):
+def _clearance(bb, rad, fin_pl, fin_rh, pa, pb, skin):
     """A lower bound [m] of how far the capsule a–b (B) of radius rad [m] is from touching any
     part (bb: ``CollideModel.bbox``; fin_pl, fin_rh: ``StepWork``): > 0 proves it touches
     nothing. It is the largest of the bounding-cylinder gaps (x range; distance to the axis −
     r_max − r), else the smallest of the body gap (distance to the axis − R − r) and the fins'
     ``_fin_gap`` (a fin whose mid-plane alone is farther than the smallest gap so far cannot
     lower it and is not evaluated further); 1-Lipschitz in the ends' displacement (module
-    docstring, candidate list). Plain arrays, not the records: this runs for every segment at
-    each rebuild, and passing the model record to a function costs more than the whole test."""
+    docstring, candidate list). A bound already above ``skin`` [m] is returned at once (the
+    callers only compare it with their skin). Plain arrays, not the records: this runs for every
+    segment at each rebuild, and passing the model record to a function costs more than the whole
+    test."""
     c = max((bb[0] - rad) - max(pa[0], pb[0]), min(pa[0], pb[0]) - (bb[1] + rad))
-    if c > CANDIDATE_SKIN:
+    if c > skin:
         return c
     axis = _axis_distance(pa, pb)
     c = max(c, axis - (bb[2] + rad))
-    if c > CANDIDATE_SKIN:
+    if c > skin:
         return c
     parts = axis - (bb[3] + rad)
     for fi in range(fin_rh.shape[0]):
@@ -246,21 +288,25 @@ def _clearance(bb, rad, fin_pl, fin_rh, pa, pb):
 
 @njit(cache=True)
 def _build_candidates(model, state, wk):
-    """Rebuild the candidate list from the node positions in B (wk.pbn): the live segments whose
-    ``_clearance`` is ≤ CANDIDATE_SKIN; every other live segment gives each of its nodes a margin
-    of its clearance (minus ROUND_OFF_GUARD), and its contact slots are reset (not in contact)."""
+    """Rebuild the candidate list from the node positions in B (wk.pbn): the live fast segments
+    (wk.fseg; all of them at single rate) whose ``_clearance`` is ≤ CANDIDATE_SKIN; every other
+    live fast segment gives each of its nodes a margin of its clearance (minus ROUND_OFF_GUARD),
+    and its contact slots are reset (not in contact). The slow segments cannot touch before the
+    window ends (``_far_window``)."""
     nf = model.fin_half.shape[0]
     pbn, pref, marg2 = wk.pbn, wk.pref, wk.marg2
-    for i in range(pbn.shape[0]):
+    for c in range(wk.nlist[2]):
+        i = wk.fnode[c]
         pref[i, 0], pref[i, 1], pref[i, 2] = pbn[i, 0], pbn[i, 1], pbn[i, 2]
         marg2[i] = np.inf
     nc = 0
     seg, alive, bb, rad, fin_pl, fin_rh = model.seg, state.alive, model.bbox, model.rope_radius, wk.fin_pl, wk.fin_rh
-    for e in range(seg.shape[0]):
+    for fc in range(wk.nlist[0]):
+        e = wk.fseg[fc]
         if not alive[e]:
             continue
         i, j = seg[e, 0], seg[e, 1]
-        c = _clearance(bb, rad, fin_pl, fin_rh, pbn[i], pbn[j])
+        c = _clearance(bb, rad, fin_pl, fin_rh, pbn[i], pbn[j], CANDIDATE_SKIN)
         if c <= CANDIDATE_SKIN:
             wk.cand[nc] = e
             nc += 1
@@ -502,12 +548,14 @@ def _book_penetration(state, delta, ratio):
 
 
 @njit(cache=True)
-def _rope_forces(model, state, wk, dt):
-    """Rope tensions into wk.f (Eq. (1)–(4)) and, with ``collide.air``, the rope's air force
-    (Eq. (5)–(8), ``collide.air``); breaks segments past their breaking stretch."""
+def _rope_forces(model, state, wk, dt, segs, count):
+    """Rope tensions of the segments ``segs[:count]`` into wk.f (Eq. (1)–(4)) and, with
+    ``collide.air``, the rope's air force (Eq. (5)–(8), ``collide.air``), their dissipation booked
+    over dt [s]; breaks segments past their breaking stretch."""
     x, v, seg, f = state.x, state.v, model.seg, wk.f
     diss = state.acc[A_DISS_ROPE]  # a local sum (as ``_integrate``); nothing else writes it here
-    for e in range(seg.shape[0]):
+    for c in range(count):
+        e = segs[c]
         if not state.alive[e]:
             continue
         i, j = seg[e, 0], seg[e, 1]
@@ -555,7 +603,8 @@ def _step_contacts(model, state, wk, dt, step):
 
 @njit(cache=True)
 def _integrate(model, state, wk, dt):
-    """Missile and free nodes one step (symplectic Euler); held nodes book their impulse. The
+    """Missile and the fast free nodes (every node at single rate) one step (symplectic Euler);
+    fast held nodes book their impulse. The
     sums are kept in locals (same additions in the same order as into ``state.acc``, which the
     compiler must otherwise reload and store at every node: it cannot rule out aliasing)."""
     x, v, g, f, fmt, acc = state.x, state.v, model.gravity, wk.f, wk.fmt, state.acc
@@ -565,7 +614,8 @@ def _integrate(model, state, wk, dt):
     body = RigidBody(state.mx, state.mv, state.mq, state.mh, model.m_mass, model.inv_inertia)
     rigid_step(body, fmt[:3], fmt[3:], dt)
     h0, h1, h2 = acc[A_PHELD], acc[A_PHELD + 1], acc[A_PHELD + 2]
-    for i in range(x.shape[0]):
+    for c in range(wk.nlist[2]):
+        i = wk.fnode[c]
         if model.free[i]:
             a = dt / model.mass[i]
             for k in range(3):
@@ -625,11 +675,146 @@ def _book_mean_velocity(model, state, wk, mv0, dt):
     state.acc[A_DISS_FRICTION] -= 0.5 * dt * cf
 
 
+FAR_BOUND_FACTOR = 2.0
+"""The far net's window bound (``_far_window``) is this × the window × the largest speed of a node
+relative to the missile's frame at the window's start: a margin for the speeds' change within the
+window (slow nodes move at constant velocity; the missile's rate and speed change by < 1e-4 of
+themselves in a window of the paper cases). A node that still moves farther stops the run (FAR)."""
+
+
 @njit(cache=True)
-def _advance(model, state, n_steps, dt):
+def _far_check(model, state, wk, alln):
+    """Every node's position in B into wk.pbn (wk.r must hold the attitude); True when one has
+    moved farther since the window's start than its bound wk.dfar."""
+    _, far = _to_body(model, state, wk, alln, alln.shape[0])
+    return far
+
+
+@njit(cache=True)
+def _far_split(model, state, wk, d):
+    """Split the live segments (positions in B: wk.pbn) into fast (``_clearance`` ≤ d [m]: may
+    touch a part within the window) and slow, in increasing order, with the fast nodes; the slow
+    segments' contact slots are reset (they cannot touch) and their nodes get the bound d."""
+    nf = model.fin_half.shape[0]
+    seg, alive, pbn, isfast = model.seg, state.alive, wk.pbn, wk.isfast
+    isfast[:] = False
+    nfs, nss = 0, 0
+    for e in range(seg.shape[0]):
+        if not alive[e]:
+            continue
+        i, j = seg[e, 0], seg[e, 1]
+        if _clearance(model.bbox, model.rope_radius, wk.fin_pl, wk.fin_rh, pbn[i], pbn[j], d) <= d:
+            wk.fseg[nfs] = e
+            nfs += 1
+            isfast[i] = True
+            isfast[j] = True
+        else:
+            wk.sseg[nss] = e
+            nss += 1
+    nfn = 0
+    for i in range(pbn.shape[0]):
+        wk.pwin[i, 0], wk.pwin[i, 1], wk.pwin[i, 2] = pbn[i, 0], pbn[i, 1], pbn[i, 2]
+        wk.dfar[i] = np.inf
+        if isfast[i]:
+            wk.fnode[nfn] = i
+            nfn += 1
+            wk.marg2[i] = 0.0  # the window's first step rebuilds the candidate list
+    for c in range(nss):
+        e = wk.sseg[c]
+        wk.dfar[seg[e, 0]] = d
+        wk.dfar[seg[e, 1]] = d
+        for p in range(e * (1 + nf), (e + 1) * (1 + nf)):
+            state.vk[p] = 0.0
+    wk.nlist[0], wk.nlist[1], wk.nlist[2] = nfs, nss, nfn
+
+
+@njit(cache=True)
+def _far_window(model, state, wk, alln, w, dt):
+    """Start a window of w steps of dt [s] (module docstring, "Far net"): check the last window's
+    bounds, split the segments (``_far_split``) with the bound d = FAR_BOUND_FACTOR × w dt × the
+    largest node speed relative to the missile's frame, and give the slow segments' forces (and
+    gravity on the slow nodes) as one impulse over the window, w dt × F: slow nodes are then moved
+    over the whole window at once (they feel no other force), fast nodes take the impulse and go
+    on step by step. wk.r, wk.w_w must hold the missile's attitude and rate. Returns OK or FAR."""
+    if _far_check(model, state, wk, alln):
+        return FAR
+    x, v, mv, mx, w_w, acc, g = state.x, state.v, state.mv, state.mx, wk.w_w, state.acc, model.gravity
+    tw = w * dt
+    wmag = np.sqrt(w_w[0] ** 2 + w_w[1] ** 2 + w_w[2] ** 2)
+    vmax = 0.0
+    for i in range(x.shape[0]):
+        rel = np.sqrt((v[i, 0] - mv[0]) ** 2 + (v[i, 1] - mv[1]) ** 2 + (v[i, 2] - mv[2]) ** 2)
+        arm = np.sqrt((x[i, 0] - mx[0]) ** 2 + (x[i, 1] - mx[1]) ** 2 + (x[i, 2] - mx[2]) ** 2)
+        vmax = max(vmax, rel + wmag * arm)
+    _far_split(model, state, wk, FAR_BOUND_FACTOR * vmax * tw)
+    f, isfast = wk.f, wk.isfast
+    for i in range(x.shape[0]):
+        for k in range(3):
+            f[i, k] = 0.0 if isfast[i] else model.mass[i] * g[k]
+    _rope_forces(model, state, wk, tw, wk.sseg, wk.nlist[1])
+    wg = acc[A_WORK_GRAVITY]
+    for i in range(x.shape[0]):
+        if not model.free[i]:
+            for k in range(3):
+                acc[A_PHELD + k] += f[i, k] * tw
+            continue
+        a = tw / model.mass[i]
+        for k in range(3):
+            if not isfast[i]:
+                wg += model.mass[i] * g[k] * v[i, k] * tw
+            v[i, k] += a * f[i, k]
+            if not isfast[i]:
+                x[i, k] += tw * v[i, k]
+    acc[A_WORK_GRAVITY] = wg
+    acc[A_FAST_SEG_STEPS] += wk.nlist[0] * w
+    return OK
+
+
+@njit(cache=True)
+def _fine_step(model, state, wk, dt, step, mv0):
+    """One step of the fast segments and nodes (all of them at single rate) and the missile: rope
+    forces, contacts, symplectic Euler, dissipation at the mean velocity. Returns the status."""
+    f, fmt, w_w, acc = wk.f, wk.fmt, wk.w_w, state.acc
+    wk.r[:, :] = quat_to_matrix(state.mq)
+    r = wk.r
+    w_w[0], w_w[1], w_w[2] = _world_rate(r, state.mh, model.inv_inertia)
+    for k in range(3):
+        fmt[k] = model.m_mass * model.gravity[k]
+        fmt[3 + k] = 0.0
+    for c in range(wk.nlist[2]):
+        i = wk.fnode[c]
+        for k in range(3):
+            f[i, k] = model.mass[i] * model.gravity[k]
+    rebuild, far = _to_body(model, state, wk, wk.fnode, wk.nlist[2])
+    if far:
+        return FAR
+    if rebuild:
+        _build_candidates(model, state, wk)
+    _rope_forces(model, state, wk, dt, wk.fseg, wk.nlist[0])
+    status, ncon = _step_contacts(model, state, wk, dt, step)
+    if status != OK:
+        return status
+    if ncon > acc[A_NCONTACT]:
+        acc[A_NCONTACT] = ncon
+    g = model.gravity
+    b0, b1, b2 = _rtv(r, fmt[0] - model.m_mass * g[0], fmt[1] - model.m_mass * g[1], fmt[2] - model.m_mass * g[2])
+    acc[A_IMP_B] += b0 * dt
+    acc[A_IMP_B + 1] += b1 * dt
+    acc[A_IMP_B + 2] += b2 * dt
+    for k in range(3):
+        mv0[k] = state.mv[k]
+    _integrate(model, state, wk, dt)
+    _book_mean_velocity(model, state, wk, mv0, dt)
+    if not (np.isfinite(state.mx[0]) and np.isfinite(state.mv[2])):
+        return NONFINITE
+    return OK
+
+
+@njit(cache=True)
+def _advance(model, state, n_steps, dt, ratio):
     n = state.x.shape[0]
     wk = _work(model, n)
-    f, fmt, w_w = wk.f, wk.fmt, wk.w_w
+    alln = np.arange(n)
     acc = state.acc
     for k in range(3):
         acc[A_IMP_B + k] = 0.0
@@ -637,35 +822,23 @@ def _advance(model, state, n_steps, dt):
     acc[A_NCONTACT] = 0.0
     acc[A_FCONTACT] = 0.0
     mv0 = np.empty(3)
-    for step in range(n_steps):
+    step = 0
+    while step < n_steps:
+        w = n_steps - step if ratio <= 1 else min(ratio, n_steps - step)
+        if ratio > 1:
+            wk.r[:, :] = quat_to_matrix(state.mq)
+            wk.w_w[0], wk.w_w[1], wk.w_w[2] = _world_rate(wk.r, state.mh, model.inv_inertia)
+            if _far_window(model, state, wk, alln, w, dt) != OK:
+                return FAR
+        for s in range(step, step + w):
+            status = _fine_step(model, state, wk, dt, s, mv0)
+            if status != OK:
+                return status
+        step += w
+    if ratio > 1:
         wk.r[:, :] = quat_to_matrix(state.mq)
-        r = wk.r
-        w_w[0], w_w[1], w_w[2] = _world_rate(r, state.mh, model.inv_inertia)
-        for k in range(3):
-            fmt[k] = model.m_mass * model.gravity[k]
-            fmt[3 + k] = 0.0
-        for i in range(n):
-            for k in range(3):
-                f[i, k] = model.mass[i] * model.gravity[k]
-        if _to_body(model, state, wk):
-            _build_candidates(model, state, wk)
-        _rope_forces(model, state, wk, dt)
-        status, ncon = _step_contacts(model, state, wk, dt, step)
-        if status != OK:
-            return status
-        if ncon > acc[A_NCONTACT]:
-            acc[A_NCONTACT] = ncon
-        g = model.gravity
-        b0, b1, b2 = _rtv(r, fmt[0] - model.m_mass * g[0], fmt[1] - model.m_mass * g[1], fmt[2] - model.m_mass * g[2])
-        acc[A_IMP_B] += b0 * dt
-        acc[A_IMP_B + 1] += b1 * dt
-        acc[A_IMP_B + 2] += b2 * dt
-        for k in range(3):
-            mv0[k] = state.mv[k]
-        _integrate(model, state, wk, dt)
-        _book_mean_velocity(model, state, wk, mv0, dt)
-        if not (np.isfinite(state.mx[0]) and np.isfinite(state.mv[2])):
-            return NONFINITE
+        if _far_check(model, state, wk, alln):
+            return FAR
     for i in range(n):
         if not (np.isfinite(state.x[i, 0]) and np.isfinite(state.x[i, 1]) and np.isfinite(state.x[i, 2])):
             return NONFINITE
@@ -673,15 +846,16 @@ def _advance(model, state, n_steps, dt):
 
 
 @njit(cache=True)
-def advance(model, state, n_steps, dt):
+def advance(model, state, n_steps, dt, ratio=1):
     """Advance ``state`` (``model.CollideState``) in place by ``n_steps`` steps of ``dt`` [s]
-    under ``model`` (``model.CollideModel``). Returns the status OK, TUNNEL (a rope centre line
-    reached a part's core and the model does not allow it; ``state.acc[A_TUN_*]`` say where) or
-    NONFINITE. Subnormal floats are flushed to zero during the call (``collide.fpu``); the
+    under ``model`` (``model.CollideModel``), the far net in windows of ``ratio`` steps (module
+    docstring, "Far net"; 1: every segment every step). Returns the status OK, TUNNEL (a rope
+    centre line reached a part's core and the model does not allow it; ``state.acc[A_TUN_*]``
+    say where), FAR (a node moved farther in a window than its bound) or NONFINITE. Subnormal floats are flushed to zero during the call (``collide.fpu``); the
     caller's floating-point control register is restored on return."""
     old = get_mxcsr()
     set_mxcsr(old | np.uint32(FTZ_DAZ))
-    status = _advance(model, state, n_steps, dt)
+    status = _advance(model, state, n_steps, dt, ratio)
     set_mxcsr(old)
     return status
 
@@ -697,7 +871,7 @@ def energies(model, state):
     pe = 0.0
     wk = _work(model, x.shape[0])
     wk.r[:, :] = quat_to_matrix(state.mq)
-    _to_body(model, state, wk)
+    _to_body(model, state, wk, wk.fnode, x.shape[0])
     uc = 0.0
     for e in range(model.seg.shape[0]):
         if not state.alive[e]:

@@ -32,10 +32,11 @@ A_TUN_STEP = 20  # step index (within the call) of the first tunnelling
 A_PEN_INT = 21  # largest penetration within the call [m]
 A_DISS_AIR = 22  # work done against the air (collide.air), whole run [J]
 A_IMP_AIR = 23  # impulse of the air on the net, whole run, W [N s] (23, 24, 25)
-N_ACC = 26
+A_FAST_SEG_STEPS = 26  # Σ over the steps of the number of fast segments (kernel, far net), whole run
+N_ACC = 27
 
 # -- status codes of ``kernel.advance`` ---------------------------------------------------------
-OK, TUNNEL, NONFINITE = 0, 1, 2
+OK, TUNNEL, NONFINITE, FAR = 0, 1, 2, 3
 
 
 class CollideModel(NamedTuple):

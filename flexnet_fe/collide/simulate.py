@@ -229,6 +229,11 @@ def _stop_message(status, st, cfg, t, names, setup, dt) -> str:
                 f"K_body = {setup.model.k_body:.3g}, K_fin = {setup.model.k_fin:.3g} from rule "
                 f"'{cfg.stiffness_rule.value}', dt = {dt:.3g} s. The contact is too soft for this impact: raise "
                 f"the rope's net.transverse_modulus, or set collide.allow_tunnelling = true to finish and flag it")
+    if status == M.FAR:
+        return (f"collide: at t ≈ {t:.4g} s a net node moved farther within one far-net window than its bound "
+                f"(kernel.FAR_BOUND_FACTOR × the window × the largest speed relative to the missile at its start): "
+                f"the split into near and far net is not proven for this motion; set collide.far_net_ratio = 1 "
+                f"(every segment every step)")
     return (f"collide: non-finite state at t = {t:.4g} s with dt = {dt:.3g} s (limits: springs "
             f"{setup.step.dt_spring:.3g} s, contact {setup.step.dt_contact:.3g} s)")
 
@@ -260,6 +265,7 @@ def simulate(net: HeldNet, missile: Missile, cfg: CollideConfig, gravity: float,
     km, start, step = setup.model, setup.start, setup.step
     n_sub = max(1, math.ceil(cfg.output_interval / (step.dt * dt_scale)))
     dt = cfg.output_interval / n_sub
+    ratio = far_ratio(cfg, step.dt_spring, dt)
     n_min = max(1, round(cfg.duration / cfg.output_interval))
     n_max = max(n_min, round(cfg.end_time / cfg.output_interval))
     log.info("collide: dt = %.4g s (%s; limits: springs %.3g s, contact %.3g s, travel per step %.3g s; "
@@ -267,23 +273,42 @@ def simulate(net: HeldNet, missile: Missile, cfg: CollideConfig, gravity: float,
              step.dt_spring, step.dt_contact, step.dt_travel, cfg.dt_safety, step.expected_penetration,
              step.expected_penetration / net.rope.radius, n_sub * n_min, n_sub * n_max)
     st = M.new_state(net.x[setup.used], km.seg.shape[0], km.fin_half.shape[0], start.x_cg, start.v_cg, start.q)
-    air_ratio = _air_step_check(km, st, cfg, dt)
+    air_ratio = _air_step_check(km, st, cfg, dt * ratio)
+    log.info("collide: far net stepped once per %d steps (%.3g s; rope springs' limit %.3g s)", ratio, dt * ratio,
+             step.dt_spring)
     rec = _Recorder(km, st, missile, np.asarray(missile.inertia, dtype=np.float64), cfg, start, n_max)
     snap_at = set(np.unique(np.round(np.linspace(0, n_min, cfg.snapshots if n_snapshots is None
                                                   else n_snapshots)).astype(int)).tolist())
     x_start = st.x.copy()
-    run = _drive(_Drive(setup, st, rec, cfg, net, missile, dt, n_sub), n_min, n_max, snap_at, log)
+    run = _drive(_Drive(setup, st, rec, cfg, net, missile, dt, n_sub, ratio), n_min, n_max, snap_at, log)
     rec.truncate(run.n_done)
     loads = _fin_loads(missile, cfg, run.n_done, run.row_start, run.ev_rows, net.rope.diameter)
     summary = rec.summary(setup, loads, x_start, dt, n_sub * run.n_done, time.perf_counter() - t_wall)
     _end_summary(summary, run, rec, cfg, net)
     summary.update(_air_summary(km, st, cfg, air_ratio))
+    steps = n_sub * run.n_done
+    summary.update(far_net_ratio=ratio, far_net_dt_s=dt * ratio, near_net_segment_share=(
+        1.0 if ratio == 1 else float(st.acc[M.A_FAST_SEG_STEPS]) / max(steps * km.seg.shape[0], 1)))
     alive = np.ones(net.model.n_springs, dtype=bool)
     alive[setup.seg_idx] = st.alive
     snaps = run.snaps
     return CollisionResult(history=rec.cols, loads=loads, snap_t=np.array(snaps[0]), snap_x=np.array(snaps[1]),
                            snap_apex=np.array(snaps[2]), snap_q=np.array(snaps[3]), summary=summary, step=step,
                            free=setup.free_full, alive=alive, net=net)
+
+
+FAR_RATIO_CAP = 16
+"""Largest automatic far-net window [steps] (``far_ratio``): the window's bound, and with it the
+near net that is stepped every step, grows with the window; docs/performance.md, "Far net"."""
+
+
+def far_ratio(cfg: CollideConfig, dt_spring: float, dt: float) -> int:
+    """Steps per far-net window [-]: ``cfg.far_net_ratio`` when set, else the largest whole number
+    of steps dt [s] within ``cfg.dt_safety`` × the rope springs' stability limit dt_spring [s]
+    (the far net's slow segments are stepped at that window), at most FAR_RATIO_CAP."""
+    if cfg.far_net_ratio:
+        return int(cfg.far_net_ratio)
+    return int(max(1, min(FAR_RATIO_CAP, math.floor(cfg.dt_safety * dt_spring / dt))))
 
 
 AIR_SPEED_FACTOR = 2.0
@@ -351,6 +376,7 @@ class _Drive:
     missile: Missile
     dt: float
     n_sub: int
+    ratio: int
 
 
 @dataclass
@@ -380,7 +406,7 @@ def _drive(d: _Drive, n_min: int, n_max: int, snap_at: set, log) -> _Run:
     names = part_names(d.missile)
     with progress_bar(n_max, "collide") as bar:
         for k in range(1, n_max + 1):
-            status = K.advance(km, st, d.n_sub, d.dt)
+            status = K.advance(km, st, d.n_sub, d.dt, d.ratio)
             t = k * cfg.output_interval
             if status != M.OK:
                 raise NumericalError(_stop_message(status, st, cfg, t, names, setup, d.dt))

@@ -114,7 +114,7 @@ def test_clearance_is_a_one_lipschitz_lower_bound(radar, scenes):
         u = rng.normal(size=3)
         half = 0.5 * rng.uniform(3e-3, 0.1) * u / np.linalg.norm(u)
         a, b = c0 - half, c0 + half
-        c = K._clearance(km.bbox, R, wk.fin_pl, wk.fin_rh, a, b)
+        c = K._clearance(km.bbox, R, wk.fin_pl, wk.fin_rh, a, b, K.CANDIDATE_SKIN)
         if _exact_touch(a, b, sh):
             n_touch += 1
             assert c <= 0.0
