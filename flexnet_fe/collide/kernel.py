@@ -151,7 +151,10 @@ class StepWork(NamedTuple):
     (nodes of fast segments), nlist (3,) int64 their counts (fast segments, slow segments, fast
     nodes); isfast (n,) bool; pwin [m] (n, 3) node positions in B at the window's start; dfar [m]
     (n,) how far each node whose motion the window's split relies on may move in B during the
-    window (inf: not checked). Single rate (ratio 1): every segment and node fast, dfar inf."""
+    window (inf: not checked); cseg [m] (ns,) each segment's clearance at the call's first window,
+    pfull [m] (n, 3) the node positions in B then, dfull [m] (n,) each node's displacement since;
+    wasfast (ns,) bool scratch of ``_far_split``. Single rate (ratio 1): every segment and node
+    fast, dfar inf."""
 
     r: np.ndarray
     w_w: np.ndarray
@@ -175,6 +178,10 @@ class StepWork(NamedTuple):
     isfast: np.ndarray
     pwin: np.ndarray
     dfar: np.ndarray
+    cseg: np.ndarray
+    pfull: np.ndarray
+    dfull: np.ndarray
+    wasfast: np.ndarray
 
 
 @njit(cache=True)
@@ -209,7 +216,8 @@ def _work(model, n):
                     np.zeros(3), np.zeros(ns, np.int64), np.zeros(2, np.int64), np.zeros((n, 3)), np.zeros(n),
                     _fin_half_spaces(model), model.fin_half + model.rope_radius, np.zeros((n, 6)), np.zeros(12),
                     np.arange(ns), np.zeros(ns, np.int64), np.arange(n), np.array([ns, 0, n]),
-                    np.ones(n, np.bool_), np.zeros((n, 3)), np.full(n, np.inf))
+                    np.ones(n, np.bool_), np.zeros((n, 3)), np.full(n, np.inf), np.zeros(ns), np.zeros((n, 3)),
+                    np.zeros(n), np.zeros(ns, np.bool_))
 
 
 @njit(cache=True)
@@ -257,11 +265,11 @@ the missile's size), the proof below is in exact arithmetic."""
 
 
 @njit(cache=True)
-def _clearance(bb, rad, fin_pl, fin_rh, pa, pb, skin):
+def _clearance(bb, rad, fin_pl, fin_rh, cones, pa, pb, skin):
     """A lower bound [m] of how far the capsule a–b (B) of radius rad [m] is from touching any
     part (bb: ``CollideModel.bbox``; fin_pl, fin_rh: ``StepWork``): > 0 proves it touches
     nothing. It is the largest of the bounding-cylinder gaps (x range; distance to the axis −
-    r_max − r), else the smallest of the body gap (distance to the axis − R − r) and the fins'
+    r_max − r), else the smallest of the body gap (``_body_gap``) and the fins'
     ``_fin_gap`` (a fin whose mid-plane alone is farther than the smallest gap so far cannot
     lower it and is not evaluated further); 1-Lipschitz in the ends' displacement (module
     docstring, candidate list). A bound already above ``skin`` [m] is returned at once (the
@@ -275,7 +283,7 @@ def _clearance(bb, rad, fin_pl, fin_rh, pa, pb, skin):
     c = max(c, axis - (bb[2] + rad))
     if c > skin:
         return c
-    parts = axis - (bb[3] + rad)
+    parts = _body_gap(axis, cones, rad, pa, pb, bb[3])
     for fi in range(fin_rh.shape[0]):
         fp = fin_pl[fi]
         da = pa[0] * fp[0, 0] + pa[1] * fp[0, 1] + pa[2] * fp[0, 2] - fp[0, 3]
@@ -306,7 +314,7 @@ def _build_candidates(model, state, wk):
         if not alive[e]:
             continue
         i, j = seg[e, 0], seg[e, 1]
-        c = _clearance(bb, rad, fin_pl, fin_rh, pbn[i], pbn[j], CANDIDATE_SKIN)
+        c = _clearance(bb, rad, fin_pl, fin_rh, model.nose_cones, pbn[i], pbn[j], CANDIDATE_SKIN)
         if c <= CANDIDATE_SKIN:
             wk.cand[nc] = e
             nc += 1
@@ -318,6 +326,23 @@ def _build_candidates(model, state, wk):
             state.vk[p] = 0.0
     wk.ncand[0] = nc
     wk.ncand[1] += 1
+
+
+@njit(cache=True, inline="always")  # (module docstring: call cost)
+def _body_gap(axis, cones, rad, pa, pb, r_body):
+    """A lower bound [m] of (distance from the segment a–b (B) to the body of revolution) − rad:
+    the largest of the bounding cylinder's axis − R and each nose cone's (axis − r0 − k s_max) /
+    (1 + k) (``missile.shapes.nose_cones``: the body lies in each; s_max = −min(a_x, b_x) the
+    segment's largest station). Each is at most the distance to its solid (in the meridian plane
+    a cone is the half-plane ρ − k s ≤ r0, at distance (ρ − k s − r0)/√(1 + k²) ≥ the value here
+    where positive; the segment's points have ρ ≥ axis and s ≤ s_max), and 1-Lipschitz in the
+    ends' displacement (axis and s_max are; the weights 1/(1 + k) and k/(1 + k) sum to 1). axis:
+    the segment's distance to the axis [m] (``_axis_distance``); cones (nc, 2); r_body R [m]."""
+    g = axis - r_body
+    s_max = -min(pa[0], pb[0])
+    for c in range(cones.shape[0]):
+        g = max(g, (axis - cones[c, 0] - cones[c, 1] * s_max) / (1.0 + cones[c, 1]))
+    return g - rad
 
 
 @njit(cache=True)
@@ -486,9 +511,9 @@ def segment_contacts(model, state, wk, e, dt, apply, step):
     ncon = 0
     nb, qb = wk.nb, wk.qb
     # body of revolution (one convex solid: body + nose)
-    if _axis_distance(pa, pb) <= model.bbox[3] + rad:
+    if _body_gap(_axis_distance(pa, pb), model.nose_cones, rad, pa, pb, model.bbox[3]) <= 0.0:
         d, s, nb[0], nb[1], nb[2], qb[0], qb[1], qb[2], part = segment_body_closest(
-            pa, pb, model.prof_kind, model.prof_data, model.prof_part)
+            pa, pb, model.prof_kind, model.prof_data, model.prof_part, rad)  # d ≥ rad: no contact (exact)
         delta = rad - d
         if d <= 0.0:
             if apply and _tunnel(model, state, base, part, s, step) == TUNNEL:
@@ -691,19 +716,43 @@ def _far_check(model, state, wk, alln):
 
 
 @njit(cache=True)
-def _far_split(model, state, wk, d):
-    """Split the live segments (positions in B: wk.pbn) into fast (``_clearance`` ≤ d [m]: may
-    touch a part within the window) and slow, in increasing order, with the fast nodes; the slow
-    segments' contact slots are reset (they cannot touch) and their nodes get the bound d."""
+def _far_split(model, state, wk, d, full):
+    """Split the live segments (positions in B: wk.pbn) into fast (clearance ≤ d [m]: may touch a
+    part within the window) and slow, in increasing order, with the fast nodes; the segments that
+    turn slow have their contact slots reset (they cannot touch) and every node of a slow segment
+    gets the bound d. ``full``: evaluate ``_clearance`` for every segment and keep it in wk.cseg
+    with the positions in wk.pfull; otherwise a segment whose kept clearance, less the larger of
+    its ends' displacements since (1-Lipschitz, module docstring), still exceeds d is slow
+    without a new evaluation (the first window of each call is full)."""
     nf = model.fin_half.shape[0]
-    seg, alive, pbn, isfast = model.seg, state.alive, wk.pbn, wk.isfast
+    seg, alive, pbn, isfast, cseg, pfull = model.seg, state.alive, wk.pbn, wk.isfast, wk.cseg, wk.pfull
+    n = pbn.shape[0]
+    dmov = wk.dfull
+    for i in range(n):
+        if full:
+            pfull[i, 0], pfull[i, 1], pfull[i, 2] = pbn[i, 0], pbn[i, 1], pbn[i, 2]
+            dmov[i] = 0.0
+        else:
+            dmov[i] = np.sqrt((pbn[i, 0] - pfull[i, 0]) ** 2 + (pbn[i, 1] - pfull[i, 1]) ** 2
+                              + (pbn[i, 2] - pfull[i, 2]) ** 2)
+    for c in range(wk.nlist[0]):  # the last window's fast segments: reset below if they turn slow
+        wk.wasfast[wk.fseg[c]] = True
     isfast[:] = False
     nfs, nss = 0, 0
     for e in range(seg.shape[0]):
         if not alive[e]:
             continue
         i, j = seg[e, 0], seg[e, 1]
-        if _clearance(model.bbox, model.rope_radius, wk.fin_pl, wk.fin_rh, pbn[i], pbn[j], d) <= d:
+        if full:
+            cseg[e] = _clearance(model.bbox, model.rope_radius, wk.fin_pl, wk.fin_rh, model.nose_cones, pbn[i],
+                                 pbn[j], d)
+            c = cseg[e]
+        else:
+            c = cseg[e] - max(dmov[i], dmov[j])
+            if c <= d:
+                c = _clearance(model.bbox, model.rope_radius, wk.fin_pl, wk.fin_rh, model.nose_cones, pbn[i],
+                               pbn[j], d)
+        if c <= d:
             wk.fseg[nfs] = e
             nfs += 1
             isfast[i] = True
@@ -711,8 +760,12 @@ def _far_split(model, state, wk, d):
         else:
             wk.sseg[nss] = e
             nss += 1
+            if wk.wasfast[e]:
+                for p in range(e * (1 + nf), (e + 1) * (1 + nf)):
+                    state.vk[p] = 0.0
+        wk.wasfast[e] = False
     nfn = 0
-    for i in range(pbn.shape[0]):
+    for i in range(n):
         wk.pwin[i, 0], wk.pwin[i, 1], wk.pwin[i, 2] = pbn[i, 0], pbn[i, 1], pbn[i, 2]
         wk.dfar[i] = np.inf
         if isfast[i]:
@@ -723,13 +776,11 @@ def _far_split(model, state, wk, d):
         e = wk.sseg[c]
         wk.dfar[seg[e, 0]] = d
         wk.dfar[seg[e, 1]] = d
-        for p in range(e * (1 + nf), (e + 1) * (1 + nf)):
-            state.vk[p] = 0.0
     wk.nlist[0], wk.nlist[1], wk.nlist[2] = nfs, nss, nfn
 
 
 @njit(cache=True)
-def _far_window(model, state, wk, alln, w, dt):
+def _far_window(model, state, wk, alln, w, dt, full):
     """Start a window of w steps of dt [s] (module docstring, "Far net"): check the last window's
     bounds, split the segments (``_far_split``) with the bound d = FAR_BOUND_FACTOR × w dt × the
     largest node speed relative to the missile's frame, and give the slow segments' forces (and
@@ -746,7 +797,7 @@ def _far_window(model, state, wk, alln, w, dt):
         rel = np.sqrt((v[i, 0] - mv[0]) ** 2 + (v[i, 1] - mv[1]) ** 2 + (v[i, 2] - mv[2]) ** 2)
         arm = np.sqrt((x[i, 0] - mx[0]) ** 2 + (x[i, 1] - mx[1]) ** 2 + (x[i, 2] - mx[2]) ** 2)
         vmax = max(vmax, rel + wmag * arm)
-    _far_split(model, state, wk, FAR_BOUND_FACTOR * vmax * tw)
+    _far_split(model, state, wk, FAR_BOUND_FACTOR * vmax * tw, full)
     f, isfast = wk.f, wk.isfast
     for i in range(x.shape[0]):
         for k in range(3):
@@ -828,7 +879,7 @@ def _advance(model, state, n_steps, dt, ratio):
         if ratio > 1:
             wk.r[:, :] = quat_to_matrix(state.mq)
             wk.w_w[0], wk.w_w[1], wk.w_w[2] = _world_rate(wk.r, state.mh, model.inv_inertia)
-            if _far_window(model, state, wk, alln, w, dt) != OK:
+            if _far_window(model, state, wk, alln, w, dt, step == 0) != OK:
                 return FAR
         for s in range(step, step + w):
             status = _fine_step(model, state, wk, dt, s, mv0)

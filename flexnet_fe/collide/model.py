@@ -56,6 +56,8 @@ class CollideModel(NamedTuple):
         exponent m; damp_c [-] the damping model's χ·v_k (Eq. (29): χ = damp_c / v_k);
         v_floor [m/s] smallest v_k; mu, v_reg [m/s] friction Eq. (32);
         allow_tunnel: finish a tunnelling run (else stop); gravity (3,) [m/s²] W.
+    Broad phase: nose_cones (nc, 2) (r0 [m], k [-]) cones ρ ≤ r0 + k s that contain the body
+        (``missile.shapes.nose_cones``; station s = −x_b; empty: the bounding cylinder alone).
     Air (``collide.air``): air_density ρ [kg/m³] (0: no air, the default); diameter [m] (ns,)
         each segment's aerodynamic diameter (Eq. (5)–(8), ``collide.air``; empty when ρ = 0).
     """
@@ -92,6 +94,7 @@ class CollideModel(NamedTuple):
     gravity: np.ndarray
     air_density: float = 0.0
     diameter: np.ndarray = np.zeros(0)
+    nose_cones: np.ndarray = np.zeros((0, 2))
 
 
 class CollideState(NamedTuple):

@@ -42,7 +42,7 @@ from flexnet_fe.contact.law import DAMPING_CODE, DampingModel, hysteresis_factor
 from flexnet_fe.contact.restitution import restitution_check
 from flexnet_fe.errors import FlexnetError, NumericalError
 from flexnet_fe.missile.geometry import Missile
-from flexnet_fe.missile.shapes import pack_shapes, part_names
+from flexnet_fe.missile.shapes import nose_cones, pack_shapes, part_names
 from flexnet_fe.progress import progress_bar
 from flexnet_fe.frames import quat_mul, quat_to_matrix
 
@@ -178,7 +178,8 @@ def build(net: HeldNet, missile: Missile, cfg: CollideConfig, gravity: float, lo
         v_floor=cfg.damping_min_approach_speed, mu=cfg.friction_coefficient,
         v_reg=cfg.friction_regularisation_speed, allow_tunnel=bool(cfg.allow_tunnelling), gravity=g_vec,
         air_density=float(air_density) if cfg.air else 0.0,
-        diameter=np.ascontiguousarray(model.diameter[seg_idx], dtype=np.float64))
+        diameter=np.ascontiguousarray(model.diameter[seg_idx], dtype=np.float64),
+        nose_cones=nose_cones(shapes.prof_kind, shapes.prof_data))
     boundary = local[boundary_nodes(model.springs, free_full)]
     log.info("collide: %d of %d nodes free (crop reach %.3g m), %d of %d segments active; K_body = %.4g, "
              "K_fin = %.4g N/m^%.2g (%s, rope E_t = %.3g Pa)", int(free_full.sum()), model.n_nodes, reach,

@@ -16,7 +16,7 @@ from flexnet_fe.collide.scene import HeldNet, fin_planes, held_net, shape_bbox
 from flexnet_fe.contact.law import DAMPING_CODE, hysteresis_factor
 from flexnet_fe.missile.config import MissileConfig
 from flexnet_fe.missile.build import build_missile
-from flexnet_fe.missile.shapes import pack_shapes
+from flexnet_fe.missile.shapes import nose_cones, pack_shapes
 from flexnet_fe.net.config import TractionNet
 
 E_T = 1.0e11
@@ -66,7 +66,7 @@ def segment_scene(missile, a_b, b_b, v_a, v_b, *, mass=1.6e-3, k=0.0, c=0.0, res
         fin_origin=sh.fin_origin, fin_axes=sh.fin_axes, fin_poly=sh.fin_poly, fin_half=sh.fin_half_thickness,
         fin_planes=fin_planes(sh), k_body=k_contact, k_fin=k_contact, exponent=1.5,
         damp_c=hysteresis_factor(DAMPING_CODE[damping], 0.5, 1.0), v_floor=1.0, mu=mu, v_reg=0.1,
-        allow_tunnel=allow_tunnel, gravity=np.zeros(3))
+        allow_tunnel=allow_tunnel, gravity=np.zeros(3), nose_cones=nose_cones(sh.prof_kind, sh.prof_data))
     st = M.new_state(x, 1, len(missile.fins), cg, np.zeros(3), np.array([1.0, 0.0, 0.0, 0.0]))
     st.v[0], st.v[1] = v_a, v_b
     return km, st

@@ -260,5 +260,5 @@ def test_broad_phase_never_drops_a_touching_pair(radar, scenes):
         n_touch += exact > 0.0
         assert K.energies(km, st)[2] == pytest.approx(exact, rel=1e-12, abs=1e-300)
         if exact > 0.0:  # the step's candidate list (``_clearance`` ≤ 0 ⇒ candidate) must keep every touching pair
-            assert K._clearance(km.bbox, km.rope_radius, wk.fin_pl, wk.fin_rh, a, b, K.CANDIDATE_SKIN) <= 0.0
+            assert K._clearance(km.bbox, km.rope_radius, wk.fin_pl, wk.fin_rh, km.nose_cones, a, b, K.CANDIDATE_SKIN) <= 0.0
     assert n_touch > 300  # the sample does exercise touching pairs

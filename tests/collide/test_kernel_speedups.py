@@ -114,7 +114,7 @@ def test_clearance_is_a_one_lipschitz_lower_bound(radar, scenes):
         u = rng.normal(size=3)
         half = 0.5 * rng.uniform(3e-3, 0.1) * u / np.linalg.norm(u)
         a, b = c0 - half, c0 + half
-        c = K._clearance(km.bbox, R, wk.fin_pl, wk.fin_rh, a, b, K.CANDIDATE_SKIN)
+        c = K._clearance(km.bbox, R, wk.fin_pl, wk.fin_rh, km.nose_cones, a, b, K.CANDIDATE_SKIN)
         if _exact_touch(a, b, sh):
             n_touch += 1
             assert c <= 0.0
@@ -134,3 +134,38 @@ def test_clearance_is_a_one_lipschitz_lower_bound(radar, scenes):
 def _unit(rng):
     u = rng.normal(size=3)
     return u / np.linalg.norm(u)
+
+
+@pytest.mark.parametrize("preset", ["radar", "infrared"])
+def test_nose_cones_bound_the_body_distance(preset):
+    # Reference: the exact body distance of ``missile.shapes.segment_body_closest`` (no broad phase).
+    # The nose cones' gap (kernel._body_gap) must be a lower bound of (distance to the body − r)
+    # for every capsule around the nose, and stay one after each end moved by 0.999 of it (the
+    # candidate list's 1-Lipschitz proof); it must also be tighter than the bounding cylinder
+    # alone where the cylinder is loose (around the radome / dome), or it does nothing.
+    from flexnet_fe.missile.build import build_missile
+    from flexnet_fe.missile.config import MissileConfig
+    from flexnet_fe.missile.shapes import nose_cones
+
+    missile = build_missile(MissileConfig(preset=preset))
+    sh = pack_shapes(missile)
+    cones = nose_cones(sh.prof_kind, sh.prof_data)
+    r_body = float(sh.prof_data[1, 1])  # the cylinder's radius and first station (profile row 1)
+    nose = float(sh.prof_data[1, 0])
+    assert cones.shape == (4, 2)
+    rng = np.random.default_rng(3)
+    tighter = 0
+    for _ in range(2000):
+        x = -rng.uniform(-0.02, 1.1 * nose)
+        c0 = np.array([x, *rng.normal(scale=0.08, size=2)])
+        u = rng.normal(size=3)
+        half = 0.5 * rng.uniform(3e-3, 0.05) * u / np.linalg.norm(u)
+        a, b = c0 - half, c0 + half
+        gap = K._body_gap(K._axis_distance(a, b), cones, R, a, b, r_body)
+        d = segment_body_closest(a, b, sh.prof_kind, sh.prof_data, sh.prof_part)[0]
+        assert gap <= max(d, 0.0) - R + 1e-12  # (inside the body, d < 0: the distance is 0)
+        tighter += K._axis_distance(a, b) - r_body - R <= 0.0 < gap
+        if gap > 0.0:
+            da, db = 0.999 * gap * _unit(rng), 0.999 * gap * _unit(rng)
+            assert segment_body_closest(a + da, b + db, sh.prof_kind, sh.prof_data, sh.prof_part)[0] > R
+    assert tighter > 300

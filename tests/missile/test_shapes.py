@@ -276,3 +276,27 @@ def test_segment_body_closest_matches_dense_sampling(missile):
         sdf = np.array([body_closest_point(a + t * (b - a), sh.prof_kind, sh.prof_data, sh.prof_part)[0] for t in ts])
         assert d <= sdf.min() + 1e-12
         assert d == pytest.approx(sdf.min(), abs=2e-7)
+
+
+def test_segment_body_closest_cutoff_never_changes_the_contact_answer(missile):
+    # Reference: the exact search (no cutoff). With a cutoff c the search may stop at the lower
+    # bound of the convex distance along the segment (its end tangents' crossing): the returned d
+    # must then be ≤ the exact minimum and ≥ c, so "d < c" (in contact for c = the rope radius)
+    # is answered the same; below the cutoff the result is the exact one, bit for bit.
+    rng = np.random.default_rng(11)
+    sh = pack_shapes(missile)
+    cut = 2.25e-3
+    skipped = 0
+    for _ in range(400):
+        x = -rng.uniform(0.0, missile.length)
+        a = np.array([x, *rng.normal(scale=0.12, size=2)])
+        b = a + rng.normal(scale=0.05, size=3)
+        exact = segment_body_closest(a, b, sh.prof_kind, sh.prof_data, sh.prof_part)
+        fast = segment_body_closest(a, b, sh.prof_kind, sh.prof_data, sh.prof_part, cut)
+        assert (fast[0] < cut) == (exact[0] < cut)
+        if fast[0] < cut:
+            assert fast == exact
+        else:
+            assert fast[0] <= exact[0] + 1e-15
+            skipped += fast != exact
+    assert skipped > 20  # the shortcut was taken
