@@ -35,8 +35,8 @@ step). Of the thousands of segments inside the missile's bounding cylinder only 
 part, so step 2 visits only the candidates of ``_build_candidates``: the live segments whose
 clearance c (``_clearance``) is ≤ CANDIDATE_SKIN. c is a lower bound of how far the capsule is
 from touching any part (c ≤ 0 for every capsule in contact or crossing a core: it is the max of
-bounding-cylinder gaps and the min of the body gap and the fins' ``_fin_gap``, each ≤ 0 when the
-capsule touches what it bounds). Each of its terms is 1-Lipschitz in D = max(|Δa|, |Δb|), the
+bounding-cylinder gaps and the min of the body gap (``_body_gap``: bounding cylinder and nose
+cones) and the fins' ``_fin_gap``, each ≤ 0 when the capsule touches what it bounds). Each of its terms is 1-Lipschitz in D = max(|Δa|, |Δb|), the
 larger displacement (in B) of the segment's ends since the list was built: a distance from the
 segment to a fixed set changes by at most D, because every point (1 − s) a + s b of it moves by
 (1 − s) Δa + s Δb, of length ≤ D; the x range moves by ≤ D; (end radius − length)/3 by ≤
