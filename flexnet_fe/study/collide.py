@@ -1,7 +1,8 @@
 """Collide study: error in the missile's Δv/v, the per-fin impulse and the CFC-filtered peak
 acceleration against CPU time, over the travel-per-step fraction and the stability safety
 factor (dt at fixed contact stiffness), the rope subdivision near contact
-(``collide.rope_split``, when the schema has it), the crop reach and crop on/off — through
+(``collide.rope_split``, when the schema has it), the far net's window (``collide.far_net_ratio``;
+the reference steps every segment every step), the crop reach and crop on/off — through
 ``collide.simulate.simulate``, the stage's own integration."""
 
 from __future__ import annotations
@@ -38,11 +39,12 @@ def points(ctx: Context) -> list[Point]:
             "collide.dt_safety": [0.25],
             "collide.rope_split": sorted({max(1, k // 2), 2 * k} - {k}),
             "collide.crop": ["false"],
-            "collide.crop_wave_speed_factor": [2.0, 8.0]}
+            "collide.crop_wave_speed_factor": [2.0, 8.0],
+            "collide.far_net_ratio": [1, 32]}
     # the reference splits the ropes twice as finely as the shipped case (read from the case file:
     # the shipped k may change), every other knob at its finest
     ref = {"collide.pass_through_fraction": 0.05 if quick else 0.025, "collide.dt_safety": 0.25,
-           "collide.crop": "false", "collide.rope_split": 2 * k}
+           "collide.crop": "false", "collide.rope_split": 2 * k, "collide.far_net_ratio": 1}
     if quick:
         # the 2 m flat net lies inside the crop reach (2.2 m) and dt is set by the travel per step:
         # crop reach and dt_safety change nothing here and are left to the full study. Lumped vs
