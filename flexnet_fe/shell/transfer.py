@@ -94,13 +94,15 @@ def _pull_back(xc, y0, y1, iters=12):
 
 
 @njit(cache=True)
-def _first_containing(offsets, cand, xg, cg, origin, e1, e2, pts3, tol):
+def _first_containing(offsets, cand, xg, cg, frame, pts3, tol):
     """For each point of ``pts3`` (m, 3) [m]: the first of its candidate cells (``cand[offsets[p]:
     offsets[p + 1]]``, from the bounding-box tree) whose bilinear map contains it within ``tol``
     in reference coordinates, and its reference coordinates clipped to [0, 1]. Cells: vertex
-    geometry nodes ``cg`` (nc, 4), coordinates ``xg`` (ng, 3), in the fin plane (origin, e1, e2).
+    geometry nodes ``cg`` (nc, 4), coordinates ``xg`` (ng, 3), in the fin plane: ``frame`` (3, 3)
+    rows origin [m], e1, e2.
     Returns (cell (m,) int32, −1 where none; X (m, 2)). Compiled: the rotary net's fins have
     ~1e7 candidates, whose numpy gathers and temporaries took a minute."""
+    origin, e1, e2 = frame[0], frame[1], frame[2]
     m = pts3.shape[0]
     cell = np.full(m, -1, np.int32)
     X = np.zeros((m, 2))
@@ -138,8 +140,8 @@ def _locate(fg: FinGeometry, pts3: np.ndarray, tol: float = 1e-9):
     cand = geometry.compute_collisions(tree, np.ascontiguousarray(pts3, dtype=np.float64))
     cg = np.ascontiguousarray(mesh.geometry.dofmap.array.reshape(-1, 4))
     cell, X = _first_containing(np.asarray(cand.offsets, dtype=np.int64), np.asarray(cand.array, dtype=np.int64),
-                                np.ascontiguousarray(mesh.geometry.x), cg, np.asarray(fg.origin, dtype=np.float64),
-                                np.asarray(fg.e1, dtype=np.float64), np.asarray(fg.e2, dtype=np.float64),
+                                np.ascontiguousarray(mesh.geometry.x), cg,
+                                np.array([fg.origin, fg.e1, fg.e2], dtype=np.float64),
                                 np.ascontiguousarray(pts3, dtype=np.float64), tol)
     here = cell >= 0
     rank_claim = np.where(here, comm.rank, comm.size)
