@@ -58,9 +58,9 @@ def fin(path: Path, material: ShellMaterial, *, supports=None,
 
 
 def area_weights(model: ShellModel) -> np.ndarray:
-    """∫ N_i dA per owned node (n_nodes,) [m²] (the row sums of the consistent P1 mass / ρt)."""
-    mat = model.material
-    return model.op.mass[0::NDOF_NODE] / (mat.density * mat.thickness)
+    """∫ N_i dA per owned node (n_nodes,) [m²] (the row sums of the consistent P1 mass / ρt,
+    before any mass scaling)."""
+    return model.node_area
 
 
 def _history(model, times, nodal_columns) -> LoadHistory:

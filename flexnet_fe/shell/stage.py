@@ -272,10 +272,14 @@ def _time_steps(model: ShellModel, shell: ShellConfig, window: FinWindow, log,
     mat = model.material
     c_p = math.sqrt(mat.plane_stress_modulus / mat.density)
     dofs = model.V.dofmap.index_map.size_global * NDOF_NODE
-    log.info("shell %s: %d DOFs, rotary inertia ×%.3g, dt_crit = %.4e s (Lanczos, %d steps, "
-             "residual %.1e), dt = %.4e s (×%.2f), element estimate h_min/c_p = %.4e s, "
-             "%d steps from %.4e s to %.4e s, stresses every %d steps (history rows every %d)",
-             name, dofs, model.rotary_scale, dt_crit, shell.lanczos_steps, resid, dt,
+    ms = model.mass_scaling
+    log.info("shell %s: %d DOFs, rotary inertia ×%.3g, mass scaling to ×%.3g the smallest cell "
+             "step (%d cells, %d nodes, mass ×%.3g at most, +%.2e of the fin's), dt_crit = %.4e s "
+             "(Lanczos, %d steps, residual %.1e), dt = %.4e s (×%.2f), element estimate "
+             "h_min/c_p = %.4e s, %d steps from %.4e s to %.4e s, stresses every %d steps "
+             "(history rows every %d)",
+             name, dofs, model.rotary_scale, ms["ratio"], ms["cells"], ms["nodes"],
+             ms["max_factor"], ms["added_mass_rel"], dt_crit, shell.lanczos_steps, resid, dt,
              shell.safety_factor, model.h_min / c_p, n_steps, start * dt,
              (start + n_steps) * dt, peak_every, every)
     return TimeSteps(dt=dt, dt_crit=dt_crit, start_step=start, n_steps=n_steps, every=every,
@@ -417,7 +421,12 @@ def finish_fin(job: FinJob, res: RunResult, shell: ShellConfig) -> dict:
             "peak_over_allowable": peak / mat.yield_strength,
             "max_abs_u_m": float(res.umax.max(initial=0.0)),
             "dt_s": ts.dt, "dt_crit_s": ts.dt_crit, "dt_element_estimate_s": model.h_min / c_p,
-            "rotary_inertia_scale": model.rotary_scale, "dofs": ts.dofs, "steps": ts.n_steps,
+            "rotary_inertia_scale": model.rotary_scale,
+            "mass_scaling_ratio": model.mass_scaling["ratio"],
+            "mass_scaled_cells": model.mass_scaling["cells"],
+            "mass_max_factor": model.mass_scaling["max_factor"],
+            "mass_added_rel": model.mass_scaling["added_mass_rel"],
+            "dofs": ts.dofs, "steps": ts.n_steps,
             "start_time_s": ts.start_step * ts.dt,
             "end_time_s": (ts.start_step + ts.n_steps) * ts.dt,
             "sample_interval_s": ts.every * ts.dt, "peak_interval_s": ts.peak_every * ts.dt}
@@ -490,7 +499,8 @@ def _setup_fin(shell: ShellConfig, spec: FinSpec, contacts: FinContacts, acc_t, 
                         poisson_ratio=spec.poisson_ratio, density=spec.density,
                         yield_strength=spec.yield_strength,
                         shear_correction=shell.shear_correction)
-    model = build_model(fin_mesh, mat, shell.rotary_inertia_scale, supports=dict(shell.supports))
+    model = build_model(fin_mesh, mat, shell.rotary_inertia_scale, supports=dict(shell.supports),
+                        mass_scaling=shell.mass_scaling)
     if shell.load is not None:
         loads = pressure_history(model, shell.load.times, shell.load.pressure)
     else:

@@ -49,7 +49,7 @@ def points(quick: bool) -> list[Point]:
         ref = {"missile.mesh_size": 0.01, "shell.safety_factor": 0.45}
     else:
         grid = {"shell.local_mesh_size": [0.005, 0.0025], "shell.safety_factor": [0.45],
-                "shell.rotary_inertia_scale": [1.0]}
+                "shell.rotary_inertia_scale": [1.0], "shell.mass_scaling": [1.25, 1.5]}
         ref = {"shell.local_mesh_size": 0.000625, "shell.safety_factor": 0.45}
     out = [Point("reference", "all finest", tuple(f"{k}={v}" for k, v in ref.items()), is_reference=True),
            Point("default", "as shipped", (), is_default=True)]
