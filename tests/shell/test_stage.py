@@ -131,6 +131,9 @@ def test_two_processes_give_the_same_history(tmp_path):
     cfg = CFG.model_copy(update={"stvenant_radius_factor": 20.0, "mass_scaling": 1.5})
     ser = run_shell(cfg, fins, tmp_path / "fin_contacts.npz", tmp_path / "history.csv",
                     tmp_path / "serial", _log())
+    # the added inertia is said in the summary (the report lists the warnings)
+    assert ser["wing"]["mass_added_rel"] == pytest.approx(1.25, rel=1e-9)
+    assert any("selective mass scaling" in w and "wing" in w for w in ser["warnings"])
     run_shell(cfg.model_copy(update={"stvenant_radius_factor": 0.0}), fins,
               tmp_path / "fin_contacts.npz", tmp_path / "history.csv", tmp_path / "nozone", _log())
     h0 = read_history_csv(tmp_path / "nozone" / "wing" / "history.csv")["max_von_mises_pa"]
