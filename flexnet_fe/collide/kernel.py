@@ -137,8 +137,10 @@ class StepWork(NamedTuple):
 
     Candidate list (``_build_candidates``): cand (ns,) int64 the segments that may touch a part
     before the list is rebuilt, in increasing order; ncand (2,) int64 (their count, builds in
-    this call); pref [m] (n, 3) node positions in B when the list was built; marg2 [m²] (n,)
-    squared distance each node may move in B before the list must be rebuilt.
+    this call); cmask (ns,) int64 per candidate the parts it may touch before the rebuild (bit 0
+    the body, bit 1 + fi fin fi: ``_part_mask``); pref [m] (n, 3) node positions in B when the
+    list was built; marg2 [m²] (n,) squared distance each node may move in B before the list must
+    be rebuilt.
     fin_pl (nf, 5, 4): per fin, the core's mid-plane (unit normal n (3), n·origin [m]) and its
     4 edge half-spaces (outward unit normal in the plane (3), offset [m]), B (``_fin_gap``);
     fin_rh [m] (nf,) rope radius + the fin's half-thickness.
@@ -182,6 +184,7 @@ class StepWork(NamedTuple):
     pfull: np.ndarray
     dfull: np.ndarray
     wasfast: np.ndarray
+    cmask: np.ndarray
 
 
 @njit(cache=True)
@@ -217,7 +220,7 @@ def _work(model, n):
                     _fin_half_spaces(model), model.fin_half + model.rope_radius, np.zeros((n, 6)), np.zeros(12),
                     np.arange(ns), np.zeros(ns, np.int64), np.arange(n), np.array([ns, 0, n]),
                     np.ones(n, np.bool_), np.zeros((n, 3)), np.full(n, np.inf), np.zeros(ns), np.zeros((n, 3)),
-                    np.zeros(n), np.zeros(ns, np.bool_))
+                    np.zeros(n), np.zeros(ns, np.bool_), np.zeros(ns, np.int64))
 
 
 @njit(cache=True)
@@ -294,13 +297,45 @@ def _clearance(bb, rad, fin_pl, fin_rh, cones, pa, pb, skin):
     return max(c, parts)
 
 
+ALL_PARTS = -1
+"""``segment_contacts`` mask: every part (bits of ``_part_mask``)."""
+
+
+@njit(cache=True)
+def _part_mask(bb, rad, fin_pl, fin_rh, cones, pa, pb, skin):
+    """(mask, lb) of a candidate capsule a–b (B): bit 0 set when the body's lower bound
+    (bounding-cylinder gaps, ``_body_gap``) is ≤ ``skin`` [m], bit 1 + fi when fin fi's
+    (bounding-cylinder gaps, ``_fin_gap``) is; lb [m] the smallest lower bound of the parts left
+    out (inf: none). Each bound is 1-Lipschitz in the ends' displacement (module docstring,
+    candidate list), so a part left out cannot be touched while both ends move by less than lb:
+    the step skips its pair with the result of its failed gate."""
+    c = max((bb[0] - rad) - max(pa[0], pb[0]), min(pa[0], pb[0]) - (bb[1] + rad))
+    axis = _axis_distance(pa, pb)
+    c = max(c, axis - (bb[2] + rad))
+    mask = 0
+    lb = np.inf
+    g = max(c, _body_gap(axis, cones, rad, pa, pb, bb[3]))
+    if g <= skin:
+        mask |= 1
+    else:
+        lb = g
+    for fi in range(fin_rh.shape[0]):
+        g = max(c, _fin_gap(fin_pl, fi, fin_rh[fi], pa, pb))
+        if g <= skin:
+            mask |= 1 << (fi + 1)
+        else:
+            lb = min(lb, g)
+    return mask, lb
+
+
 @njit(cache=True)
 def _build_candidates(model, state, wk):
     """Rebuild the candidate list from the node positions in B (wk.pbn): the live fast segments
-    (wk.fseg; all of them at single rate) whose ``_clearance`` is ≤ CANDIDATE_SKIN; every other
-    live fast segment gives each of its nodes a margin of its clearance (minus ROUND_OFF_GUARD),
-    and its contact slots are reset (not in contact). The slow segments cannot touch before the
-    window ends (``_far_window``)."""
+    (wk.fseg; all of them at single rate) whose ``_clearance`` is ≤ CANDIDATE_SKIN, each with
+    the parts it may touch (``_part_mask``; the parts left out give its nodes a margin of their
+    lower bound); every other live fast segment gives each of its nodes a margin of its clearance
+    (margins less ROUND_OFF_GUARD), and its contact slots are reset (not in contact). The slow
+    segments cannot touch before the window ends (``_far_window``)."""
     nf = model.fin_half.shape[0]
     pbn, pref, marg2 = wk.pbn, wk.pref, wk.marg2
     for c in range(wk.nlist[2]):
@@ -316,8 +351,15 @@ def _build_candidates(model, state, wk):
         i, j = seg[e, 0], seg[e, 1]
         c = _clearance(bb, rad, fin_pl, fin_rh, model.nose_cones, pbn[i], pbn[j], CANDIDATE_SKIN)
         if c <= CANDIDATE_SKIN:
+            mask, lb = _part_mask(bb, rad, fin_pl, fin_rh, model.nose_cones, pbn[i], pbn[j],
+                                  CANDIDATE_SKIN)
             wk.cand[nc] = e
+            wk.cmask[nc] = mask
             nc += 1
+            if lb < np.inf:
+                m2 = (lb - ROUND_OFF_GUARD) ** 2
+                marg2[i] = min(marg2[i], m2)
+                marg2[j] = min(marg2[j], m2)
             continue
         m2 = (c - ROUND_OFF_GUARD) ** 2
         marg2[i] = min(marg2[i], m2)
@@ -373,19 +415,19 @@ def _fin_gap(fin_pl, fi, rh, pa, pb):
 
 
 @njit(cache=True, inline="always")  # (module docstring: call cost)
-def _apply_to_node(model, state, f, node, weight, force, dt):
+def _apply_to_node(free, acc, f, node, weight, force, dt):
     """Add ``weight`` × the contact force ``force`` = (f0, f1, f2) [N] to a free node's force row of ``f``;
     a held node (crop boundary) does not move, so its impulse [N s] goes to the held-node
     accumulator that closes the momentum balance."""
     f0, f1, f2 = force
-    if model.free[node]:
+    if free[node]:
         f[node, 0] += weight * f0
         f[node, 1] += weight * f1
         f[node, 2] += weight * f2
     else:
-        state.acc[A_PHELD] += weight * f0 * dt
-        state.acc[A_PHELD + 1] += weight * f1 * dt
-        state.acc[A_PHELD + 2] += weight * f2 * dt
+        acc[A_PHELD] += weight * f0 * dt
+        acc[A_PHELD + 1] += weight * f1 * dt
+        acc[A_PHELD + 2] += weight * f2 * dt
 
 
 @njit(cache=True, inline="always")  # (module docstring: call cost)
@@ -403,12 +445,12 @@ def _take_wrench(out, k, lever, force):
 
 
 @njit(cache=True, inline="always")  # (module docstring: call cost)
-def _book_dissipative(model, wk, node, weight, forces):
+def _book_dissipative(free, fd, node, weight, forces):
     """Add ``weight`` × the contact damping and friction forces ``forces`` (6 floats) [N] to a free
-    node's row of wk.fd (``_book_mean_velocity``); a held node does not move: no work."""
-    if model.free[node]:
+    node's row of fd (wk.fd, ``_book_mean_velocity``); a held node does not move: no work."""
+    if free[node]:
         for k in range(6):
-            wk.fd[node, k] += weight * forces[k]
+            fd[node, k] += weight * forces[k]
 
 
 @njit(cache=True, inline="always")  # (module docstring: call cost)
@@ -445,11 +487,11 @@ def _apply(model, state, wk, slot, fin, delta, s, dt):
         inv_m += s * s / model.mass[j]
     ft0, ft1, ft2 = friction_force(fn, model.mu, vt0, vt1, vt2, model.v_reg, STICK_FRACTION / (inv_m * dt))
     f0, f1, f2 = fn * nw0 + ft0, fn * nw1 + ft1, fn * nw2 + ft2
-    _apply_to_node(model, state, f, i, w, (f0, f1, f2), dt)
-    _apply_to_node(model, state, f, j, s, (f0, f1, f2), dt)
+    _apply_to_node(model.free, state.acc, f, i, w, (f0, f1, f2), dt)
+    _apply_to_node(model.free, state.acc, f, j, s, (f0, f1, f2), dt)
     fd0, fd1, fd2 = (fn - fel) * nw0, (fn - fel) * nw1, (fn - fel) * nw2
-    _book_dissipative(model, wk, i, w, (fd0, fd1, fd2, ft0, ft1, ft2))
-    _book_dissipative(model, wk, j, s, (fd0, fd1, fd2, ft0, ft1, ft2))
+    _book_dissipative(model.free, wk.fd, i, w, (fd0, fd1, fd2, ft0, ft1, ft2))
+    _book_dissipative(model.free, wk.fd, j, s, (fd0, fd1, fd2, ft0, ft1, ft2))
     _take_wrench(wk.md, 0, (l0, l1, l2), (fd0, fd1, fd2))
     _take_wrench(wk.md, 6, (l0, l1, l2), (ft0, ft1, ft2))
     _take_wrench(fmt, 0, (l0, l1, l2), (f0, f1, f2))
@@ -497,79 +539,95 @@ def _tunnel(model, state, slot, part, s, step):
     return OK if model.allow_tunnel else TUNNEL
 
 
-@njit(cache=True, inline="always")  # (module docstring: call cost)
-def segment_contacts(model, state, wk, e, dt, apply, step):
-    """All contacts of capsule e (ends wk.pbn[i], wk.pbn[j] in B) with the missile's parts.
+@njit(cache=True)
+def segment_contacts(model, state, wk, segs, masks, count, dt, apply, step):
+    """All contacts of the capsules segs[:count] (ends wk.pbn in B) with the missile's parts, in
+    that order; dead segments have none (their slots reset when applying).
 
-    apply: add forces (``_apply``) and update the contact slots; otherwise only measure.
+    masks[c]: the parts to test for segs[c] (``_part_mask`` bits; an empty ``masks``: every
+    part); a part left out is treated as its failed gate (no contact, slot reset), which
+    ``_part_mask`` proves it is. apply: add forces (``_apply``) and update the contact slots;
+    otherwise only measure. One call per list, not per segment: a call that binds the model,
+    state and work records costs ~0.25 µs even inlined (module docstring, call cost).
     Returns (stored contact energy Σ U(δ) [J], status, number of contacts)."""
     nf = model.fin_half.shape[0]
-    base = e * (1 + nf)
-    pa, pb = wk.pbn[model.seg[e, 0]], wk.pbn[model.seg[e, 1]]
     rad = model.rope_radius
     energy = 0.0
     ncon = 0
     nb, qb = wk.nb, wk.qb
-    # body of revolution (one convex solid: body + nose)
-    if _body_gap(_axis_distance(pa, pb), model.nose_cones, rad, pa, pb, model.bbox[3]) <= 0.0:
-        d, s, nb[0], nb[1], nb[2], qb[0], qb[1], qb[2], part = segment_body_closest(
-            pa, pb, model.prof_kind, model.prof_data, model.prof_part, rad)  # d ≥ rad: no contact (exact)
-        delta = rad - d
-        if d <= 0.0:
-            if apply and _tunnel(model, state, base, part, s, step) == TUNNEL:
-                return energy, TUNNEL, ncon
-        elif delta > 0.0:
-            energy += contact_potential(delta, model.k_body, model.exponent)
-            ncon += 1
+    for c in range(count):
+        e = segs[c]
+        base = e * (1 + nf)
+        if not state.alive[e]:
             if apply:
-                _apply(model, state, wk, base, -1, delta, s, dt)
-                _book_penetration(state, delta, delta / rad)
+                for p in range(base, base + 1 + nf):
+                    state.vk[p] = 0.0
+            continue
+        mask = masks[c] if masks.shape[0] > 0 else ALL_PARTS
+        pa, pb = wk.pbn[model.seg[e, 0]], wk.pbn[model.seg[e, 1]]
+        u_e = 0.0  # this segment's energy, then added: the sums of one call per segment
+        # body of revolution (one convex solid: body + nose)
+        if mask & 1 and _body_gap(_axis_distance(pa, pb), model.nose_cones, rad, pa, pb,
+                                  model.bbox[3]) <= 0.0:
+            d, s, nb[0], nb[1], nb[2], qb[0], qb[1], qb[2], part = segment_body_closest(
+                pa, pb, model.prof_kind, model.prof_data, model.prof_part, rad)  # d ≥ rad: no contact (exact)
+            delta = rad - d
+            if d <= 0.0:
+                if apply and _tunnel(model, state, base, part, s, step) == TUNNEL:
+                    return energy + u_e, TUNNEL, ncon
+            elif delta > 0.0:
+                u_e += contact_potential(delta, model.k_body, model.exponent)
+                ncon += 1
+                if apply:
+                    _apply(model, state, wk, base, -1, delta, s, dt)
+                    _book_penetration(state.acc, delta, delta / rad)
+            elif apply:
+                state.vk[base] = 0.0
         elif apply:
             state.vk[base] = 0.0
-    elif apply:
-        state.vk[base] = 0.0
-    for fi in range(nf):
-        slot = base + 1 + fi
-        if _fin_gap(wk.fin_pl, fi, wk.fin_rh[fi], pa, pb) > 0.0:
-            if apply:
-                state.vk[slot] = 0.0
-            continue
-        dist, s, qu, qv, crossed = segment_core_closest(pa, pb, model.fin_origin[fi], model.fin_axes[fi],
-                                                        model.fin_poly[fi])
-        ax = model.fin_axes[fi]
-        for k in range(3):
-            qb[k] = model.fin_origin[fi, k] + qu * ax[0, k] + qv * ax[1, k]
-        half = model.fin_half[fi]
-        if crossed:
-            if qb[1] * qb[1] + qb[2] * qb[2] < model.bbox[3] * model.bbox[3]:
-                continue  # through the root extension, i.e. inside the body: booked by the body above
-            if apply and _tunnel(model, state, slot, FIN_PART_OFFSET + fi, s, step) == TUNNEL:
-                return energy, TUNNEL, ncon
-            continue
-        delta = rad + half - dist
-        if delta <= 0.0:
-            if apply:
-                state.vk[slot] = 0.0
-            continue
-        energy += contact_potential(delta, model.k_fin, model.exponent)
-        ncon += 1
-        if apply:
+        for fi in range(nf):
+            slot = base + 1 + fi
+            if not mask & (1 << (fi + 1)) or _fin_gap(wk.fin_pl, fi, wk.fin_rh[fi], pa, pb) > 0.0:
+                if apply:
+                    state.vk[slot] = 0.0
+                continue
+            dist, s, qu, qv, crossed = segment_core_closest(pa, pb, model.fin_origin[fi], model.fin_axes[fi],
+                                                            model.fin_poly[fi])
+            ax = model.fin_axes[fi]
             for k in range(3):
-                nb[k] = (pa[k] + s * (pb[k] - pa[k]) - qb[k]) / dist
-                qb[k] += half * nb[k]  # the fin's surface point under the rope
-            _apply(model, state, wk, slot, fi, delta, s, dt)
-            _book_penetration(state, delta, delta / (rad + half))
+                qb[k] = model.fin_origin[fi, k] + qu * ax[0, k] + qv * ax[1, k]
+            half = model.fin_half[fi]
+            if crossed:
+                if qb[1] * qb[1] + qb[2] * qb[2] < model.bbox[3] * model.bbox[3]:
+                    continue  # through the root extension, i.e. inside the body: booked by the body above
+                if apply and _tunnel(model, state, slot, FIN_PART_OFFSET + fi, s, step) == TUNNEL:
+                    return energy + u_e, TUNNEL, ncon
+                continue
+            delta = rad + half - dist
+            if delta <= 0.0:
+                if apply:
+                    state.vk[slot] = 0.0
+                continue
+            u_e += contact_potential(delta, model.k_fin, model.exponent)
+            ncon += 1
+            if apply:
+                for k in range(3):
+                    nb[k] = (pa[k] + s * (pb[k] - pa[k]) - qb[k]) / dist
+                    qb[k] += half * nb[k]  # the fin's surface point under the rope
+                _apply(model, state, wk, slot, fi, delta, s, dt)
+                _book_penetration(state.acc, delta, delta / (rad + half))
+        energy += u_e
     return energy, OK, ncon
 
 
 @njit(cache=True, inline="always")  # (module docstring: call cost)
-def _book_penetration(state, delta, ratio):
-    if delta > state.acc[A_PEN]:
-        state.acc[A_PEN] = delta
-    if delta > state.acc[A_PEN_INT]:
-        state.acc[A_PEN_INT] = delta
-    if ratio > state.acc[A_PEN_RATIO]:
-        state.acc[A_PEN_RATIO] = ratio
+def _book_penetration(acc, delta, ratio):
+    if delta > acc[A_PEN]:
+        acc[A_PEN] = delta
+    if delta > acc[A_PEN_INT]:
+        acc[A_PEN_INT] = delta
+    if ratio > acc[A_PEN_RATIO]:
+        acc[A_PEN_RATIO] = ratio
 
 
 @njit(cache=True)
@@ -588,9 +646,10 @@ def _rope_forces(model, state, wk, dt, segs, count):
             (x[j, 0] - x[i, 0], x[j, 1] - x[i, 1], x[j, 2] - x[i, 2]), (v[j, 0] - v[i, 0], v[j, 1] - v[i, 1],
             v[j, 2] - v[i, 2]), 0.0, (model.rest[e], model.k[e], model.c[e], model.off[e]))
         if stretch > model.break_stretch[e]:
+            u_c, _, _ = segment_contacts(model, state, wk, segs[c:c + 1], np.zeros(0, np.int64), 1, dt,
+                                         False, 0)
             state.alive[e] = False
             state.acc[A_NBROKEN] += 1.0
-            u_c, _, _ = segment_contacts(model, state, wk, e, dt, False, 0)
             state.acc[A_BROKEN] += rope_elastic_energy(stretch, model.k[e]) + u_c
             continue
         if t > 0.0:
@@ -611,19 +670,8 @@ def _rope_forces(model, state, wk, dt, segs, count):
 def _step_contacts(model, state, wk, dt, step):
     """Contacts of the candidate segments (the others cannot touch: ``_build_candidates``), in
     increasing segment order as over all segments. Returns (status, contacts)."""
-    nf = model.fin_half.shape[0]
-    ncon = 0
-    for c in range(wk.ncand[0]):
-        e = wk.cand[c]
-        if not state.alive[e]:
-            for p in range(e * (1 + nf), (e + 1) * (1 + nf)):
-                state.vk[p] = 0.0
-            continue
-        _, status, nc = segment_contacts(model, state, wk, e, dt, True, step)
-        ncon += nc
-        if status != OK:
-            return status, ncon
-    return OK, ncon
+    _, status, ncon = segment_contacts(model, state, wk, wk.cand, wk.cmask, wk.ncand[0], dt, True, step)
+    return status, ncon
 
 
 @njit(cache=True)
@@ -923,7 +971,8 @@ def energies(model, state):
     wk = _work(model, x.shape[0])
     wk.r[:, :] = quat_to_matrix(state.mq)
     _to_body(model, state, wk, wk.fnode, x.shape[0])
-    uc = 0.0
+    near = np.empty(model.seg.shape[0], np.int64)
+    nn = 0
     for e in range(model.seg.shape[0]):
         if not state.alive[e]:
             continue
@@ -931,6 +980,7 @@ def energies(model, state):
         ln = np.sqrt((x[j, 0] - x[i, 0]) ** 2 + (x[j, 1] - x[i, 1]) ** 2 + (x[j, 2] - x[i, 2]) ** 2)
         pe += rope_elastic_energy(ln - (model.rest[e] - model.off[e]), model.k[e])
         if _near_missile(model, wk.pbn[i], wk.pbn[j]):
-            u, _, _ = segment_contacts(model, state, wk, e, 0.0, False, 0)
-            uc += u
+            near[nn] = e
+            nn += 1
+    uc, _, _ = segment_contacts(model, state, wk, near, np.zeros(0, np.int64), nn, 0.0, False, 0)
     return ke, pe, uc
