@@ -43,11 +43,13 @@ segment to a fixed set changes by at most D, because every point (1 − s) a + s
 (D + 2D)/3. So a segment left out with clearance c > 0 cannot touch while each of its ends has
 moved by less than c; every node gets the smallest c of its left-out segments as its margin,
 ``_to_body`` compares each node's displacement with it every step, and the list is rebuilt as
-soon as one node reaches its margin (and at the start of every call). The segments a step
-evaluates are then a superset of those in contact, in the same (increasing) order, and the
-per-pair gates (body: distance to the axis; fin: ``_fin_gap``) are supersets too; a pair that
-fails a gate has no force, so every force, accumulator and contact slot is computed with the same
-arithmetic in the same order as with no broad phase (tests/collide/test_kernel_speedups.py).
+soon as one node reaches its margin (and at the start of every call). The same holds per part:
+each candidate keeps the parts whose own bound is ≤ CANDIDATE_SKIN (``_part_mask``; the bounds of
+the parts left out join its nodes' margins), and the step skips the others as failed gates. The
+segments a step evaluates are then a superset of those in contact, in the same (increasing) order,
+and the per-pair gates (body: distance to the axis; fin: ``_fin_gap``) are supersets too; a pair
+that fails a gate has no force, so every force, accumulator and contact slot is computed with the
+same arithmetic in the same order as with no broad phase (tests/collide/test_kernel_speedups.py).
 
 Far net (``advance(..., ratio)``; multiple time stepping, the impulse method of Grubmüller et al.
 1991 / r-RESPA, Tuckerman et al. 1992, with lazy positions as in asynchronous variational
@@ -69,11 +71,16 @@ window's end for the slow ones, whose motion in the window is a straight line) s
 FAR. ratio = 1 is the single-rate loop (every segment and node every step, no check).
 
 Call cost: a compiled call that passes the model, state and work records (≈ 50 arrays) costs
-≈ 0.5 µs when LLVM does not inline it — more than the narrow phase of a capsule. The per-pair
-functions (``segment_contacts``, ``_apply``, ``_apply_to_node``, ``_tunnel``,
-``_book_penetration``) are therefore inlined by numba (``inline="always"``), and the per-segment
-tests of the rebuild (``_clearance``, ``_fin_gap``) take plain arrays (docs/performance.md,
-"Collide kernel at fine rope resolution").
+≈ 0.5 µs when LLVM does not inline it — more than the narrow phase of a capsule — and even
+inlined by numba (``inline="always"``) binding the records to the callee's names costs ≈ 0.23 µs
+per call (measured: the fin narrow phase of 58 candidates, 19.4 µs with the records, 6.4 µs with
+plain arrays; the per-reference counting of each array of the records). So the narrow phase is
+one call per list (``segment_contacts`` walks the candidates), the per-contact helpers
+(``_apply_to_node``, ``_book_dissipative``, ``_book_penetration``) take plain arrays, and the
+per-segment tests of the rebuild (``_clearance``, ``_part_mask``, ``_fin_gap``) too
+(docs/performance.md, "Collide kernel at fine rope resolution" and "Collide: the narrow phase
+without the records"). ``_apply`` and ``_tunnel`` still take the records (one binding per
+contact; ~30 arrays would otherwise be positional).
 
 A fin's core is its contact polygon (root extended into the body, ``missile.shapes``), used as it
 is wherever its closest core point lies: a rope in the corner between a fin and the body is pressed
@@ -540,8 +547,8 @@ def _tunnel(model, state, slot, part, s, step):
 
 
 @njit(cache=True)
-def segment_contacts(model, state, wk, segs, masks, count, dt, apply, step):
-    """All contacts of the capsules segs[:count] (ends wk.pbn in B) with the missile's parts, in
+def segment_contacts(model, state, wk, segs, masks, dt, apply, step):
+    """All contacts of the capsules ``segs`` (ends wk.pbn in B) with the missile's parts, in
     that order; dead segments have none (their slots reset when applying).
 
     masks[c]: the parts to test for segs[c] (``_part_mask`` bits; an empty ``masks``: every
@@ -555,7 +562,7 @@ def segment_contacts(model, state, wk, segs, masks, count, dt, apply, step):
     energy = 0.0
     ncon = 0
     nb, qb = wk.nb, wk.qb
-    for c in range(count):
+    for c in range(segs.shape[0]):
         e = segs[c]
         base = e * (1 + nf)
         if not state.alive[e]:
@@ -646,8 +653,8 @@ def _rope_forces(model, state, wk, dt, segs, count):
             (x[j, 0] - x[i, 0], x[j, 1] - x[i, 1], x[j, 2] - x[i, 2]), (v[j, 0] - v[i, 0], v[j, 1] - v[i, 1],
             v[j, 2] - v[i, 2]), 0.0, (model.rest[e], model.k[e], model.c[e], model.off[e]))
         if stretch > model.break_stretch[e]:
-            u_c, _, _ = segment_contacts(model, state, wk, segs[c:c + 1], np.zeros(0, np.int64), 1, dt,
-                                         False, 0)
+            u_c, _, _ = segment_contacts(model, state, wk, segs[c:c + 1], np.zeros(0, np.int64), dt, False,
+                                         0)
             state.alive[e] = False
             state.acc[A_NBROKEN] += 1.0
             state.acc[A_BROKEN] += rope_elastic_energy(stretch, model.k[e]) + u_c
@@ -670,7 +677,8 @@ def _rope_forces(model, state, wk, dt, segs, count):
 def _step_contacts(model, state, wk, dt, step):
     """Contacts of the candidate segments (the others cannot touch: ``_build_candidates``), in
     increasing segment order as over all segments. Returns (status, contacts)."""
-    _, status, ncon = segment_contacts(model, state, wk, wk.cand, wk.cmask, wk.ncand[0], dt, True, step)
+    n = wk.ncand[0]
+    _, status, ncon = segment_contacts(model, state, wk, wk.cand[:n], wk.cmask[:n], dt, True, step)
     return status, ncon
 
 
@@ -982,5 +990,5 @@ def energies(model, state):
         if _near_missile(model, wk.pbn[i], wk.pbn[j]):
             near[nn] = e
             nn += 1
-    uc, _, _ = segment_contacts(model, state, wk, near, np.zeros(0, np.int64), nn, 0.0, False, 0)
+    uc, _, _ = segment_contacts(model, state, wk, near[:nn], np.zeros(0, np.int64), 0.0, False, 0)
     return ke, pe, uc
