@@ -10,7 +10,8 @@ symmetric about p). Spreading over the rope width keeps the peak stress finite a
 refined (a true point force gives a logarithmically unbounded bending stress).
 
 Stencil choice (departure from the paper, which does not describe its load transfer):
-1. a disk of radius w/2 (equal-area rings, points ≤ ~h/2 apart: :func:`stencil_resolution`)
+1. a disk of radius w/2 (equal-area rings, points ≤ ~h/2 apart: :func:`stencil_resolution`,
+   h the median shortest edge of the cells the contact points lie in, :func:`_load_cell_size`)
    when all its points lie on the fin;
 2. else (contact at or near an edge) a segment of length w through p parallel to the nearest fin
    edge (Gauss points ≤ ~h/2 apart) — a rope across an edge touches it over about its width;
@@ -217,8 +218,8 @@ def contact_transfer(fg: FinGeometry, points: np.ndarray, widths: np.ndarray, *,
 
     _snap_to_planform(fg, segs, p2, points, plane_tol)
 
-    # 1. disk stencils
-    h = min_edge_length(fg.mesh)
+    # 1. disk stencils, spaced by the cells the loads land in (not the fin's smallest edge)
+    h = _load_cell_size(fg, to3(p2))
     n_rings, n_phi, n_line = stencil_resolution(float(r.max(initial=0.0)), h)
     DISK = disk_stencil(n_rings, n_phi)
     GL = np.polynomial.legendre.leggauss(n_line)
@@ -262,6 +263,24 @@ def contact_transfer(fg: FinGeometry, points: np.ndarray, widths: np.ndarray, *,
     G = _assemble(fg, np.concatenate(ev_idx)[kp], np.concatenate(wts)[kp], np.concatenate(cells)[kp],
                   np.concatenate(Xs)[kp], ne)
     return _owned_rows(fg.V, G, comm)
+
+
+def _load_cell_size(fg: FinGeometry, centres3: np.ndarray) -> float:
+    """Median over the contact points ``centres3`` (ne, 3) [m] of the shortest edge of the cell
+    each lies in [m] (all ranks; the fin's shortest edge when there is no point): the size
+    :func:`stencil_resolution` lays the stencils by. Not the fin's shortest edge: a few
+    kite-shaped cells (docs/validation.md, "Fin mesh quality") halve it and made every stencil
+    ~8× denser than the cells under the loads need (rotary wing_4: ~1e7 points to locate;
+    docs/performance.md, "Shell set-up: stencils by the loaded cells")."""
+    cell, _, mine, _ = _locate(fg, centres3)
+    cg = fg.mesh.geometry.dofmap.array.reshape(-1, 4)
+    x = fg.mesh.geometry.x
+    P = x[cg[cell[mine]]]  # (m, 4, 3), dolfinx order (0,0),(1,0),(0,1),(1,1)
+    edges = np.stack([np.linalg.norm(P[:, j] - P[:, i], axis=1)
+                      for i, j in ((0, 1), (0, 2), (1, 3), (2, 3))], axis=1)
+    sizes = np.concatenate(fg.mesh.comm.allgather(edges.min(axis=1, initial=np.inf)))
+    sizes = sizes[np.isfinite(sizes)]
+    return float(np.median(sizes)) if len(sizes) else min_edge_length(fg.mesh)
 
 
 def _snap_to_planform(fg: FinGeometry, segs, p2: np.ndarray, points: np.ndarray, plane_tol: float) -> None:
