@@ -34,15 +34,18 @@ def lumped_mass(V: fem.FunctionSpace, mat: ShellMaterial, rotary_scale: float) -
     return m
 
 
+def cell_edges(x: np.ndarray, cells: np.ndarray) -> np.ndarray:
+    """Edge lengths (nc, 4) [m] of quadrilaterals ``cells`` (nc, 4) indexing points ``x`` (n, 3),
+    dolfinx vertex order (0,0),(1,0),(0,1),(1,1): edges 0–1, 0–2, 1–3, 2–3."""
+    P = x[cells]
+    return np.stack([np.linalg.norm(P[:, j] - P[:, i], axis=1)
+                     for i, j in ((0, 1), (0, 2), (1, 3), (2, 3))], axis=1).reshape(-1, 4)
+
+
 def min_edge_length(mesh) -> float:
     """Shortest cell edge of the whole (distributed) quadrilateral mesh [m]."""
-    x = mesh.geometry.x
-    cells = mesh.geometry.dofmap.array.reshape(-1, 4)  # dolfinx quad order (0,0),(1,0),(0,1),(1,1)
-    h = np.inf
-    for i, j in ((0, 1), (0, 2), (1, 3), (2, 3)):
-        if len(cells):
-            h = min(h, float(np.linalg.norm(x[cells[:, i]] - x[cells[:, j]], axis=1).min()))
-    return mesh.comm.allreduce(h, op=MPI.MIN)
+    e = cell_edges(mesh.geometry.x, mesh.geometry.dofmap.array.reshape(-1, 4))
+    return mesh.comm.allreduce(float(e.min(initial=np.inf)), op=MPI.MIN)
 
 
 def auto_rotary_scale(h: float, mat: ShellMaterial) -> float:
@@ -74,10 +77,8 @@ def cell_step_lengths(V: fem.FunctionSpace) -> tuple[np.ndarray, np.ndarray]:
     cells = V.dofmap.list.array.reshape(-1, 4)
     x = V.tabulate_dof_coordinates()
     P = x[cells]
-    edges = np.stack([np.linalg.norm(P[:, j] - P[:, i], axis=1)
-                      for i, j in ((0, 1), (0, 2), (1, 3), (2, 3))], axis=1)
     area = 0.5 * np.linalg.norm(np.cross(P[:, 3] - P[:, 0], P[:, 2] - P[:, 1]), axis=1)
-    return cells, area / edges.max(axis=1)
+    return cells, area / cell_edges(x, cells).max(axis=1, initial=0.0)
 
 
 def selective_mass_scaling(V: fem.FunctionSpace, m: PETSc.Vec, ratio: float) -> dict:

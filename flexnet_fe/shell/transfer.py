@@ -34,7 +34,7 @@ from numba import njit
 from scipy import sparse
 
 from flexnet_fe.shell.forms import NDOF_NODE  # (u_x, u_y, u_z, θ_1, θ_2); forces load the first 3
-from flexnet_fe.shell.mass import min_edge_length
+from flexnet_fe.shell.mass import cell_edges, min_edge_length
 from flexnet_fe.shell.recovery import shape_q1
 
 
@@ -274,10 +274,7 @@ def _load_cell_size(fg: FinGeometry, centres3: np.ndarray) -> float:
     docs/performance.md, "Shell set-up: stencils by the loaded cells")."""
     cell, _, mine, _ = _locate(fg, centres3)
     cg = fg.mesh.geometry.dofmap.array.reshape(-1, 4)
-    x = fg.mesh.geometry.x
-    P = x[cg[cell[mine]]]  # (m, 4, 3), dolfinx order (0,0),(1,0),(0,1),(1,1)
-    edges = np.stack([np.linalg.norm(P[:, j] - P[:, i], axis=1)
-                      for i, j in ((0, 1), (0, 2), (1, 3), (2, 3))], axis=1)
+    edges = cell_edges(fg.mesh.geometry.x, cg[cell[mine]])
     sizes = np.concatenate(fg.mesh.comm.allgather(edges.min(axis=1, initial=np.inf)))
     sizes = sizes[np.isfinite(sizes)]
     return float(np.median(sizes)) if len(sizes) else min_edge_length(fg.mesh)
