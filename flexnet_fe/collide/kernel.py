@@ -74,7 +74,7 @@ Call cost: a compiled call that passes the model, state and work records (≈ 50
 ≈ 0.5 µs when LLVM does not inline it — more than the narrow phase of a capsule — and even
 inlined by numba (``inline="always"``) binding the records to the callee's names costs ≈ 0.23 µs
 per call (measured: the fin narrow phase of 58 candidates, 19.4 µs with the records, 6.4 µs with
-plain arrays; the per-reference counting of each array of the records). So the narrow phase is
+plain arrays; presumably the reference counts of the records' arrays). So the narrow phase is
 one call per list (``segment_contacts`` walks the candidates), the per-contact helpers
 (``_apply_to_node``, ``_book_dissipative``, ``_book_penetration``) take plain arrays, and the
 per-segment tests of the rebuild (``_clearance``, ``_part_mask``, ``_fin_gap``) too
