@@ -179,8 +179,6 @@ def nose_cones(prof_kind: np.ndarray, prof_data: np.ndarray, n: int = NOSE_CONES
     return np.array(rows, dtype=np.float64).reshape(-1, 2)
 
 
-
-
 @njit(cache=True)
 def _closest_on_segment_2d(ps, pr, s0, r0, s1, r1):
     """Closest point (s, r) on the segment (s0, r0)–(s1, r1) to (ps, pr)."""

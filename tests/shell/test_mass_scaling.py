@@ -71,10 +71,12 @@ def test_graded_mesh_scales_the_cells_below_the_target(graded):
                                rtol=1e-14)
     info = model.mass_scaling
     assert info["cells"] == np.count_nonzero(f_cell > 1) > 0
-    assert info["cells"] < 0.5 * len(L)  # selective: the graded mesh's worst cells only
+    assert info["cells"] < 0.5 * len(L)  # selective: the graded mesh's worst cells only (9 of 504)
     m_t = base.op.mass[::NDOF_NODE].sum()
     assert info["added_mass_rel"] == pytest.approx(
         (base.op.mass[::NDOF_NODE] * (f_node - 1)).sum() / m_t, rel=1e-10)
+    # the element bound raises each scaled cell's own estimate to r × the floor, not the global
+    # step (other modes may then set it), so only a clear rise is asserted (measured: ×1.43)
     assert _dt(model) > 1.1 * _dt(base)
     # loads are areas, not masses: a pressure gives the same nodal forces with the added mass
     np.testing.assert_array_equal(api.area_weights(model), api.area_weights(base))
