@@ -56,7 +56,7 @@ def rope_scene(missile, n: int, y_span: float, speed: float, damping: str, mu: f
         mass=mass, free=free, rope_radius=ROPE_D / 2, m_mass=float(missile.mass),
         inv_inertia=np.linalg.inv(np.asarray(missile.inertia)), cg_b=cg, bbox=shape_bbox(missile),
         prof_kind=sh.prof_kind, prof_data=sh.prof_data, prof_part=sh.prof_part, fin_origin=sh.fin_origin,
-        fin_axes=sh.fin_axes, fin_poly=sh.fin_poly, fin_half=sh.fin_half_thickness, fin_planes=fin_planes(sh),
+        fin_axes=sh.fin_axes, fin_poly=sh.fin_poly, fin_core=sh.fin_core, fin_ncore=sh.fin_ncore, fin_half=sh.fin_half_thickness, fin_planes=fin_planes(sh),
         k_body=kc, k_fin=kc, exponent=1.5, damp_c=hysteresis_factor(DAMPING_CODE[damping], 0.5, 1.0), v_floor=1.0,
         mu=mu, v_reg=0.1, allow_tunnel=False, gravity=np.zeros(3))
     st = M.new_state(x, n, len(missile.fins), cg, np.array([speed, 0.0, 0.0]), np.array([1.0, 0.0, 0.0, 0.0]))

@@ -101,7 +101,8 @@ class CollideConfig(Section):
     far_net_ratio: int = Field(0, ge=0, le=4096, description=(
         "the far net (segments that cannot touch the missile within a window) is stepped once per window of "
         "this many contact steps, the near net every step (impulse method, collide.kernel 'Far net') [-]; "
-        "0 = automatic (the rope springs' stability limit, at most collide.simulate.FAR_RATIO_CAP); "
+        "0 = automatic (the stiffest rope segment turns by at most collide.simulate.FAR_PHASE per window, "
+        "at most collide.simulate.FAR_RATIO_CAP steps); "
         "1 = every segment every step"))
     crop: bool = Field(True, description="integrate only the net the impact can reach; hold the rest")
     crop_wave_speed_factor: Positive = Field(

@@ -82,15 +82,17 @@ per-segment tests of the rebuild (``_clearance``, ``_part_mask``, ``_fin_gap``) 
 without the records"). ``_apply`` and ``_tunnel`` still take the records (one binding per
 contact; ~30 arrays would otherwise be positional).
 
-A fin's core is its contact polygon (root extended into the body, ``missile.shapes``), used as it
-is wherever its closest core point lies: a rope in the corner between a fin and the body is pressed
-by both (the stored energy is the sum of the two potentials, each continuous in the positions, so
-the pair stays conservative). Dropping the fin pair whenever its closest core point fell inside
-the body's radius — the former rule — switched the fin potential on and off discontinuously
-(a rope at the root of a swept leading edge has its closest core point inside the body until it
-is ≈ 2 mm deep in the rounded edge): energy created independently of dt (+2 200 % on the
-root-corner test of ``tests/collide/test_contact_kernel.py``). A centre line crossing the root
-extension is inside the body, which the body pair has already booked as tunnelling.
+A fin's core is its contact polygon (root extended into the body, tip corners rounded to the fin
+set's ``tip_corner_radius``: ``missile.shapes`` fin_core, ``missile.planform``; the broad phase's
+bounds use the sharp trapezoid, which contains it), used as it is wherever its closest core point
+lies: a rope in the corner between a fin and the body is pressed by both (the stored energy is the
+sum of the two potentials, each continuous in the positions, so the pair stays conservative).
+Dropping the fin pair whenever its closest core point fell inside the body's radius — the former
+rule — switched the fin potential on and off discontinuously (a rope at the root of a swept leading
+edge has its closest core point inside the body until it is ≈ 2 mm deep in the rounded edge):
+energy created independently of dt (+2 200 % on the root-corner test of
+``tests/collide/test_contact_kernel.py``). A centre line crossing the root extension is inside the
+body, which the body pair has already booked as tunnelling.
 """
 
 from __future__ import annotations
@@ -599,7 +601,7 @@ def segment_contacts(model, state, wk, segs, masks, dt, apply, step):
                     state.vk[slot] = 0.0
                 continue
             dist, s, qu, qv, crossed = segment_core_closest(pa, pb, model.fin_origin[fi], model.fin_axes[fi],
-                                                            model.fin_poly[fi])
+                                                            model.fin_core[fi, :model.fin_ncore[fi]])
             ax = model.fin_axes[fi]
             for k in range(3):
                 qb[k] = model.fin_origin[fi, k] + qu * ax[0, k] + qv * ax[1, k]

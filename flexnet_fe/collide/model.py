@@ -50,8 +50,10 @@ class CollideModel(NamedTuple):
     Missile: m_mass [kg]; inv_inertia [1/(kg m²)] (3, 3) about the CG in B; cg_b [m] (3,);
         bbox (4,) (x_min, x_max, r_max, R_body) bounding cylinder of all parts in B;
         prof_kind, prof_data, prof_part: body of revolution; fin_origin (nf, 3), fin_axes
-        (nf, 3, 3), fin_poly (nf, 4, 2), fin_half (nf,): fin cores and half-thicknesses
-        (``missile.shapes.ShapeArrays``); fin_planes (nf, 7) broad phase (``scene.fin_planes``).
+        (nf, 3, 3), fin_poly (nf, 4, 2) planform trapezoids (the broad phase's bounds), fin_core
+        (nf, kc, 2) and fin_ncore (nf,) the contact cores (tip corners rounded), fin_half (nf,)
+        half-thicknesses (``missile.shapes.ShapeArrays``); fin_planes (nf, 7) broad phase
+        (``scene.fin_planes``).
     Contact (``contact.law``): k_body, k_fin [N/m^m] stiffness K of Eq. (28) per part kind;
         exponent m; damp_c [-] the damping model's χ·v_k (Eq. (29): χ = damp_c / v_k);
         v_floor [m/s] smallest v_k; mu, v_reg [m/s] friction Eq. (32);
@@ -81,6 +83,8 @@ class CollideModel(NamedTuple):
     fin_origin: np.ndarray
     fin_axes: np.ndarray
     fin_poly: np.ndarray
+    fin_core: np.ndarray
+    fin_ncore: np.ndarray
     fin_half: np.ndarray
     fin_planes: np.ndarray
     k_body: float

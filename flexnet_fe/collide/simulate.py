@@ -172,7 +172,8 @@ def build(net: HeldNet, missile: Missile, cfg: CollideConfig, gravity: float, lo
         inv_inertia=np.linalg.inv(np.asarray(missile.inertia, dtype=np.float64)),
         cg_b=np.asarray(missile.cg, dtype=np.float64), bbox=start.bbox, prof_kind=shapes.prof_kind,
         prof_data=shapes.prof_data, prof_part=shapes.prof_part, fin_origin=shapes.fin_origin,
-        fin_axes=shapes.fin_axes, fin_poly=shapes.fin_poly, fin_half=shapes.fin_half_thickness,
+        fin_axes=shapes.fin_axes, fin_poly=shapes.fin_poly, fin_core=shapes.fin_core, fin_ncore=shapes.fin_ncore,
+        fin_half=shapes.fin_half_thickness,
         fin_planes=fin_planes(shapes), k_body=k_body, k_fin=k_fin, exponent=cfg.contact_exponent,
         damp_c=hysteresis_factor(DAMPING_CODE[cfg.damping_model], cfg.restitution, 1.0),
         v_floor=cfg.damping_min_approach_speed, mu=cfg.friction_coefficient,
@@ -304,14 +305,24 @@ in the energy balance: radar_traction 0.009 / 0.039 / 0.23 / 1.34 % of the energ
 windows of 1 / 16 / 32 / 64 steps, for 166.6 / 42.6 / 34.8 / 32.0 s (docs/performance.md, "Collide:
 the far net in windows"): beyond 16 the error grows ~6× per doubling for < 20 % less time."""
 
+FAR_PHASE = 0.125
+"""[rad] Largest phase ω_max × window of the stiffest rope segment's axial mode in an automatic
+far-net window (``far_ratio``). The impulse method's error grows with it, not with the window's
+length in steps: radar_traction's energy balance error (largest |balance| / energy exchanged) was
+4.1e-5 / 8.6e-5 / 3.9e-4 / 9.7e-4 / 2.6e-3 at phases 0.054 / 0.077 / 0.109 / 0.154 / 0.218 (rope pieces
+0.175 … 0.7 mm at the fins, windows 4 … 16; docs/collide_convergence.md, "Rounded tip corners and
+the far net's phase"). A fixed window of 16 steps let it grow ~2.6× per halving of the pieces (the
+pieces' ω ∝ 1/l, the contact step ∝ √l); a fixed phase keeps it below ~5e-4 at every piece length."""
+
 
 def far_ratio(cfg: CollideConfig, dt_spring: float, dt: float) -> int:
     """Steps per far-net window [-]: ``cfg.far_net_ratio`` when set, else the largest whole number
-    of steps dt [s] within ``cfg.dt_safety`` × the rope springs' stability limit dt_spring [s]
-    (the far net's slow segments are stepped at that window), at most FAR_RATIO_CAP."""
+    of steps dt [s] in which the stiffest rope segment's axial mode (ω_max = 2 / dt_spring, dt_spring
+    [s] its stability limit, ``timestep.spring_limit``) turns by at most FAR_PHASE, at most
+    FAR_RATIO_CAP."""
     if cfg.far_net_ratio:
         return int(cfg.far_net_ratio)
-    return int(max(1, min(FAR_RATIO_CAP, math.floor(cfg.dt_safety * dt_spring / dt))))
+    return int(max(1, min(FAR_RATIO_CAP, math.floor(FAR_PHASE * dt_spring / (2.0 * dt)))))
 
 
 AIR_SPEED_FACTOR = 2.0

@@ -34,6 +34,7 @@ from typing import Any
 import numpy as np
 from pydantic import Field, model_validator
 
+from flexnet_fe.missile.planform import tip_corner_room
 from flexnet_fe.schema import NonNegative, PoissonRatio, Positive, Section, Vec3
 
 
@@ -100,6 +101,11 @@ class FinSetConfig(Section):
         description="roll angle φ of fins 1..4 from +y_b towards +z_b [deg] "
         "(explicitly named non-SI input unit)"
     )
+    tip_corner_radius: NonNegative = Field(
+        0.0, description="planform radius of the two tip corners (leading edge–tip and "
+        "tip–trailing edge) of the rope-contact shape [m]; 0: sharp corners, rounded only by the "
+        "half-thickness (missile.planform)"
+    )
 
 
 class MissileConfig(Section):
@@ -159,6 +165,12 @@ class MissileConfig(Section):
                 raise ValueError(
                     f"{label}: root chord [{fs.root_le_station}, {te}] m must lie on the "
                     f"cylinder [{self.nose_length}, {self.body_length}] m"
+                )
+            room = tip_corner_room(fs.span, fs.root_chord, fs.tip_chord, fs.leading_edge_sweep_deg)
+            if fs.tip_corner_radius > room:
+                raise ValueError(
+                    f"{label}.tip_corner_radius = {fs.tip_corner_radius} m: the rounded tip corners "
+                    f"need their arcs to fit on the edges (at most {room:.4g} m for this planform)"
                 )
         given = (self.mass, self.cg, self.inertia)
         if self.mass_model is MassModel.GIVEN and any(v is None for v in given):

@@ -83,6 +83,7 @@ class Fin:
     corners: np.ndarray
     uv: np.ndarray
     material: FinMaterial
+    tip_corner_radius: float = 0.0  # [m] planform radius of the tip corners (contact shape only)
 
     @property
     def area(self) -> float:
@@ -194,7 +195,8 @@ def build_fin(name: str, kind: FinKind, index: int, fs: FinSetConfig, roll_deg: 
                root_chord=fs.root_chord, tip_chord=fs.tip_chord, span=fs.span,
                leading_edge_sweep=float(lam), thickness=fs.thickness,
                origin=_frozen(origin), e1=_frozen(e1), e2=_frozen(e2), n=_frozen(n),
-               corners=_frozen(corners), uv=_frozen(uv), material=material)
+               corners=_frozen(corners), uv=_frozen(uv), material=material,
+               tip_corner_radius=fs.tip_corner_radius)
 
 
 def build_fins(cfg: MissileConfig) -> tuple[Fin, ...]:

@@ -31,6 +31,11 @@ Packed arrays (``pack_shapes(missile) -> ShapeArrays``, a NamedTuple; pass ``*sh
     fin_part   int64 (nf,)     part id 2 + i
     fin_bound  float64 (nf, 4) bounding sphere of each contact plate: centre (3,) [m], radius [m]
                (lets the queries skip fins that cannot be nearest / cannot be touched)
+    fin_core   float64 (nf, kc, 2) the rope-contact core: ``fin_poly`` with its tip corners
+               rounded to the fin set's ``tip_corner_radius`` (``missile.planform``; the first
+               fin_ncore[i] rows, counter-clockwise; equal to ``fin_poly`` for sharp corners).
+               It lies inside ``fin_poly``, so bounds computed on ``fin_poly`` hold for it
+    fin_ncore  int64 (nf,)     vertices of each fin's core
 
 ``@njit`` functions (usable inside other ``@njit`` code):
 
@@ -45,7 +50,7 @@ Packed arrays (``pack_shapes(missile) -> ShapeArrays``, a NamedTuple; pass ``*sh
     2+i fin i). A point exactly on the axis gets its radial direction from +y_b (documented
     choice; any is correct there).
 
-``segment_core_closest(a, b, fin_origin[i], fin_axes[i], fin_poly[i]) -> (dist, s, q_u, q_v, crossed)``
+``segment_core_closest(a, b, fin_origin[i], fin_axes[i], fin_core[i, :fin_ncore[i]]) -> (dist, s, q_u, q_v, crossed)``
     Closest pair of a rope segment (a capsule's centre line) and a fin's core polygon (module
     section "capsule contact"); ``segment_body_closest(a, b, prof_kind, prof_data, prof_part)``
     the deepest / nearest point of a segment for the body of revolution.
@@ -71,6 +76,7 @@ import numpy as np
 from numba import njit
 
 from flexnet_fe.missile.geometry import Missile
+from flexnet_fe.missile.planform import round_tip_corners
 
 PART_BODY = 0
 PART_NOSE = 1
@@ -89,6 +95,8 @@ class ShapeArrays(NamedTuple):
     fin_half_thickness: np.ndarray
     fin_part: np.ndarray
     fin_bound: np.ndarray
+    fin_core: np.ndarray
+    fin_ncore: np.ndarray
 
 
 def part_names(missile: Missile) -> list[str]:
@@ -130,6 +138,7 @@ def pack_shapes(missile: Missile) -> ShapeArrays:
     half = np.empty(nf)
     fpart = np.empty(nf, np.int64)
     bound = np.empty((nf, 4))
+    cores = []
     for i, fin in enumerate(missile.fins):
         origin[i] = fin.origin
         axes[i] = np.stack([fin.e1, fin.e2, fin.n])
@@ -145,7 +154,12 @@ def pack_shapes(missile: Missile) -> ShapeArrays:
         centre = corners.mean(axis=0)
         bound[i, :3] = centre
         bound[i, 3] = np.linalg.norm(corners - centre, axis=1).max() + half[i]
-    return ShapeArrays(kind, data, part, origin, axes, poly, half, fpart, bound)
+        cores.append(round_tip_corners(uv, fin.tip_corner_radius))
+    ncore = np.array([len(c) for c in cores], np.int64)
+    core = np.zeros((nf, int(ncore.max(initial=4)), 2))
+    for i, c in enumerate(cores):
+        core[i, :len(c)] = c
+    return ShapeArrays(kind, data, part, origin, axes, poly, half, fpart, bound, core, ncore)
 
 
 # ----------------------------------------------------------------------------- body of revolution

@@ -63,7 +63,7 @@ def segment_scene(missile, a_b, b_b, v_a, v_b, *, mass=1.6e-3, k=0.0, c=0.0, res
         break_stretch=np.array([break_stretch]), mass=np.full(2, mass), free=np.array(free, np.bool_),
         rope_radius=rope_radius, m_mass=float(missile.mass), inv_inertia=np.linalg.inv(np.asarray(missile.inertia)),
         cg_b=cg, bbox=shape_bbox(missile), prof_kind=sh.prof_kind, prof_data=sh.prof_data, prof_part=sh.prof_part,
-        fin_origin=sh.fin_origin, fin_axes=sh.fin_axes, fin_poly=sh.fin_poly, fin_half=sh.fin_half_thickness,
+        fin_origin=sh.fin_origin, fin_axes=sh.fin_axes, fin_poly=sh.fin_poly, fin_core=sh.fin_core, fin_ncore=sh.fin_ncore, fin_half=sh.fin_half_thickness,
         fin_planes=fin_planes(sh), k_body=k_contact, k_fin=k_contact, exponent=1.5,
         damp_c=hysteresis_factor(DAMPING_CODE[damping], 0.5, 1.0), v_floor=1.0, mu=mu, v_reg=0.1,
         allow_tunnel=allow_tunnel, gravity=np.zeros(3), nose_cones=nose_cones(sh.prof_kind, sh.prof_data))

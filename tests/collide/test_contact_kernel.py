@@ -262,3 +262,40 @@ def test_broad_phase_never_drops_a_touching_pair(radar, scenes):
         if exact > 0.0:  # the step's candidate list (``_clearance`` ≤ 0 ⇒ candidate) must keep every touching pair
             assert K._clearance(km.bbox, km.rope_radius, wk.fin_pl, wk.fin_rh, km.nose_cones, a, b, K.CANDIDATE_SKIN) <= 0.0
     assert n_touch > 300  # the sample does exercise touching pairs
+
+
+def test_rounded_tip_corner_is_met_later_by_its_offset(radar, scenes):
+    # Reference: geometry of a corner of interior angle θ rounded to radius ρ (missile.planform):
+    # along the outward bisector the arc lies ρ/sin(θ/2) − ρ inside the sharp corner (the middle
+    # chord vertex sits on the arc). A rope segment straddling wing_1's plane, moving at 50 m/s
+    # along that bisector towards the tip leading-edge corner, must first touch later by
+    # (ρ/sin(θ/2) − ρ)/v than at the sharp corner (first touch within the 0.1 µs sampling), and
+    # both runs must close their energy to the step error, as above.
+    from flexnet_fe.missile.build import build_missile
+    from flexnet_fe.missile.config import MissileConfig
+    rho, v, dt = 0.01, 50.0, 1e-8
+    rounded = build_missile(MissileConfig(preset="radar", wings={"tip_corner_radius": rho}))
+    fin = radar.fin("wing_1")
+    uv = np.asarray(fin.uv)
+    d1, d2 = uv[1] - uv[2], uv[3] - uv[2]
+    d1, d2 = d1 / np.linalg.norm(d1), d2 / np.linalg.norm(d2)
+    theta = math.acos(d1 @ d2)
+    out = -(d1 + d2) / np.linalg.norm(d1 + d2)
+    out_b = out[0] * fin.e1 + out[1] * fin.e2
+    start = fin.corners[2] + (R + H + 2e-3) * out_b
+    first = []
+    for mis in (radar, rounded):
+        km, st = scenes.segment_scene(mis, start - 0.025 * fin.n, start + 0.025 * fin.n, -v * out_b, -v * out_b,
+                                      k=318.0, c=0.01, k_contact=6.7e8, damping="lankarani_nikravesh", mu=0.2)
+        e0 = scenes.total_energy(km, st, mis)
+        for call in range(3000):
+            assert K.advance(km, st, 10, dt) == M.OK
+            if st.acc[M.A_FCONTACT] > 0.0:
+                first.append(call * 10 * dt)
+                break
+        for _ in range(3000):
+            assert K.advance(km, st, 10, dt) == M.OK
+        assert st.acc[M.A_FCONTACT] == 0.0 and st.fin_w[0] > 0.0  # it hit wing_1 and has left
+        assert abs(scenes.total_energy(km, st, mis) - e0) < 5e-3 * e0
+    expected = (rho / math.sin(theta / 2) - rho) / v
+    assert first[1] - first[0] == pytest.approx(expected, abs=2 * 10 * dt)

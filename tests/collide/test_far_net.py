@@ -94,11 +94,13 @@ def test_a_node_past_its_window_bound_is_caught(radar, log, scenes):
     assert K._far_check(km, moved, wk, alln)
 
 
-def test_automatic_ratio_follows_the_rope_springs_limit():
-    # Reference: the rule of ``far_ratio``: the largest whole number of steps within dt_safety ×
-    # the springs' limit, capped; an explicit ratio is taken as given.
+def test_automatic_ratio_bounds_the_springs_phase():
+    # Reference: the rule of ``far_ratio``: the largest whole number of steps W with
+    # W dt ω_max ≤ FAR_PHASE, ω_max = 2 / dt_spring, capped; an explicit ratio is taken as given.
     cfg = CollideConfig(dt_safety=0.5)
-    assert far_ratio(cfg, dt_spring=1e-5, dt=1e-6) == 5
+    assert far_ratio(cfg, dt_spring=1e-5, dt=1e-7) == 6  # 0.125 × 1e-5 / 2e-7 = 6.25
+    assert far_ratio(cfg, dt_spring=1.15e-5, dt=3.92e-8) == FAR_RATIO_CAP  # radar_traction, 0.7 mm: 18.3
+    assert far_ratio(cfg, dt_spring=1.15e-5 / 4, dt=3.92e-8 / 2) == 9  # pieces / 4: ω × 4, dt / 2
     assert far_ratio(cfg, dt_spring=1e-3, dt=1e-8) == FAR_RATIO_CAP
     assert far_ratio(cfg, dt_spring=1e-8, dt=1e-8) == 1
     assert far_ratio(CollideConfig(far_net_ratio=3), dt_spring=1e-3, dt=1e-8) == 3
