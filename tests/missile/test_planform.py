@@ -71,8 +71,13 @@ def test_room_and_refusal():
 
 @pytest.fixture(scope="module")
 def rounded():
+    """The radar preset with R-rounded wing tips: (missile, shapes, wing_1, its index, its core,
+    the reference centre of its tip leading-edge arc)."""
     mis = build_missile(MissileConfig(preset="radar", wings={"tip_corner_radius": R}))
-    return mis, pack_shapes(mis)
+    sh = pack_shapes(mis)
+    fin = mis.fin("wing_1")
+    core = sh.fin_core[fin.index, :sh.fin_ncore[fin.index]]
+    return mis, sh, fin, fin.index, core, _inward_offset_intersection(np.asarray(fin.uv), TIP_CORNERS[0], R)
 
 
 def test_capsule_distance_round_the_corner(rounded):
@@ -80,12 +85,8 @@ def test_capsule_distance_round_the_corner(rounded):
     # outside the corner's arc, to a planar disk-rounded corner is sqrt((|ρ − c| − R)² + w²),
     # c the arc's centre (offset-line reference above); the chords lie inside the arc by at most
     # the sagitta R (1 − cos(α/2)), which bounds the difference.
-    mis, sh = rounded
-    fin = mis.fin("wing_1")
-    i = fin.index
-    core = sh.fin_core[i, :sh.fin_ncore[i]]
+    mis, sh, fin, i, core, centre = rounded
     k = TIP_CORNERS[0]
-    centre = _inward_offset_intersection(np.asarray(fin.uv), k, R)
     d1, d2 = fin.uv[k - 1] - fin.uv[k], fin.uv[k + 1] - fin.uv[k]
     theta = np.arccos(d1 @ d2 / np.linalg.norm(d1) / np.linalg.norm(d2))
     sag = R * (1 - np.cos((np.pi - theta) / ARC_SEGMENTS / 2))
@@ -110,12 +111,7 @@ def test_normal_turns_continuously_round_the_corner(rounded):
     # Reference: the closest-point map of a convex set is 1-Lipschitz, so the normal (p − q)/|p − q|
     # turns by at most |Δp|/dist per move Δp. A point 2 mm outside the sharp corner's bisector
     # sweeps the whole corner at 1.5 mm above the plane.
-    mis, sh = rounded
-    fin = mis.fin("wing_1")
-    i = fin.index
-    core = sh.fin_core[i, :sh.fin_ncore[i]]
-    k = TIP_CORNERS[0]
-    centre = _inward_offset_intersection(np.asarray(fin.uv), k, R)
+    _, sh, fin, i, core, centre = rounded
     normals, dists, steps = [], [], []
     last = None
     for phi in np.linspace(np.pi / 2 + 0.6, -0.6, 1201):
