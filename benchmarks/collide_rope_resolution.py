@@ -43,6 +43,8 @@ def run(args) -> None:
                "fin_impulse_ns": dict(s["fin_impulse_ns"]), "duration_s": s["duration_s"],
                "passed_through": s.get("passed_through"), "energy_error_rel": s["energy_error_rel"],
                "steps": s["steps"], "dt_s": s["dt_s"], "warnings": len(s["warnings"]),
+               "active_segments": s["active_segments"], "crop_boundary_motion_m": s["crop_boundary_motion_m"],
+               "momentum_error_rel": s["momentum_error_rel"],
                "wall_s": time.perf_counter() - w0, "cpu_s": time.process_time() - c0, "load_1min": load,
                "machine": f"{platform.node()} {os.cpu_count()} cores", "date": time.strftime("%Y-%m-%d")}
         with open(args.out, "a") as fh:
