@@ -10,8 +10,9 @@ strand sticks on the corner or slips off depends on where its nodes fall
 replaces the corner by a circular arc tangent to both edges. The arc is stored as ARC_SEGMENTS
 chords (inscribed), so the core stays a convex polygon and the exact segment–polygon distance of
 ``missile.shapes.segment_core_closest`` applies unchanged; the sphere sweep rounds each chord's
-vertex by h/2 ≥ 1.5 mm, far more than the chords' sagitta R (1 − cos(π / (2 ARC_SEGMENTS)))
-≤ 0.005 R, so the contact normal turns continuously round the corner.
+vertex by h/2 ≥ 1.5 mm, far more than the chords' sagitta R (1 − cos((π − θ) / (2 ARC_SEGMENTS)))
+(θ the corner's interior angle; < 0.02 R for any corner, ≤ 0.005 R at the paper fins' tip corners,
+θ ≈ 88–145°), so the contact normal turns continuously round the corner.
 """
 
 from __future__ import annotations
@@ -19,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 ARC_SEGMENTS = 8
-"""Chords per rounded corner: a 90° corner turns 11.25° per chord (sagitta 0.5 % of R)."""
+"""Chords per rounded corner: a 90° corner turns 11.25° per chord (sagitta 0.48 % of R)."""
 
 TIP_CORNERS = (2, 3)
 """Corner indices of the tip leading edge and tip trailing edge in the trapezoid (root TE, root LE,

@@ -34,7 +34,9 @@ Packed arrays (``pack_shapes(missile) -> ShapeArrays``, a NamedTuple; pass ``*sh
     fin_core   float64 (nf, kc, 2) the rope-contact core: ``fin_poly`` with its tip corners
                rounded to the fin set's ``tip_corner_radius`` (``missile.planform``; the first
                fin_ncore[i] rows, counter-clockwise; equal to ``fin_poly`` for sharp corners).
-               It lies inside ``fin_poly``, so bounds computed on ``fin_poly`` hold for it
+               It lies inside ``fin_poly``, so bounds computed on ``fin_poly`` hold for it. Used
+               by the rope contact (``segment_core_closest`` in the collide kernel); the point
+               queries below keep the sharp prism of ``fin_poly``
     fin_ncore  int64 (nf,)     vertices of each fin's core
 
 ``@njit`` functions (usable inside other ``@njit`` code):
