@@ -312,7 +312,8 @@ length in steps: radar_traction's energy balance error (largest |balance| / ener
 4.1e-5 / 8.6e-5 / 3.9e-4 / 9.7e-4 / 2.6e-3 at phases 0.054 / 0.077 / 0.109 / 0.154 / 0.218 (rope pieces
 0.175 … 0.7 mm at the fins, windows 4 … 16; docs/collide_convergence.md, "Rounded tip corners and
 the far net's phase"). A fixed window of 16 steps let it grow ~2.6× per halving of the pieces (the
-pieces' ω ∝ 1/l, the contact step ∝ √l); a fixed phase keeps it below ~5e-4 at every piece length."""
+pieces' ω ∝ 1/l, the contact step ∝ √l); at this phase it was 3.9e-4 / 3.3e-4 / 4.3e-4 at 0.7 / 0.35 /
+0.175 mm (windows 16 / 12 / 9)."""
 
 
 def far_ratio(cfg: CollideConfig, dt_spring: float, dt: float) -> int:
