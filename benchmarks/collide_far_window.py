@@ -40,7 +40,7 @@ def _state_at(deploy: Path, call: int):
         return K.advance(km, st, n, dt, ratio)
 
     real = SIM.K
-    SIM.K = types.SimpleNamespace(advance=advance, energies=K.energies)
+    SIM.K = types.SimpleNamespace(advance=advance, energies=K.energies, net_energies=K.net_energies)
     try:
         simulate_case(case_with(Path("cases/radar_traction"), ["collide.snapshots=2"]), deploy)
     except _Stop:

@@ -107,7 +107,8 @@ from flexnet_fe.collide.fpu import FTZ_DAZ, get_mxcsr, set_mxcsr
 from flexnet_fe.collide.model import (A_BROKEN, A_CROSS, A_DISS_CONTACT, A_DISS_FRICTION, A_DISS_ROPE,
                                       A_FAST_SEG_STEPS, A_FCONTACT, A_IMP_B, A_NBROKEN, A_NCONTACT, A_PEN,
                                       A_PEN_INT, A_PEN_RATIO, A_PHELD, A_SKIPPED, A_TUN_PART, A_TUN_SPEED,
-                                      A_TUN_STEP, A_WORK_GRAVITY, FAR, NONFINITE, OK, TUNNEL)
+                                      A_TUN_STEP, A_U_CONTACT, A_WORK_GRAVITY, FAR, NONFINITE, OK,
+                                      TUNNEL)
 from flexnet_fe.collide.rigid_body import RigidBody, rigid_step
 from flexnet_fe.contact.law import approach_speed, contact_potential, friction_force, normal_force
 from flexnet_fe.missile.shapes import FIN_PART_OFFSET, segment_body_closest, segment_core_closest
@@ -944,14 +945,29 @@ def _advance(model, state, n_steps, dt, ratio):
             if status != OK:
                 return status
         step += w
-    if ratio > 1:
-        wk.r[:, :] = quat_to_matrix(state.mq)
-        if _far_check(model, state, wk, alln):
-            return FAR
+    wk.r[:, :] = quat_to_matrix(state.mq)
+    if ratio > 1 and _far_check(model, state, wk, alln):
+        return FAR
     for i in range(n):
         if not (np.isfinite(state.x[i, 0]) and np.isfinite(state.x[i, 1]) and np.isfinite(state.x[i, 2])):
             return NONFINITE
+    acc[A_U_CONTACT] = _stored_contact_energy(model, state, wk)
     return OK
+
+
+@njit(cache=True)
+def _stored_contact_energy(model, state, wk):
+    """Σ U(δ) [J] of the contacts at the end of a call, from the candidate list: the list is made
+    valid at the final positions as a step would (rebuilt if a fast node reached its margin), and
+    the slow segments cannot touch (the window's bound, just checked). The same pairs in the same
+    order as ``energies``' scan of every segment near the missile, which adds only zeros besides:
+    the same sum to the last bit (tests/collide/test_far_net.py). wk.r must hold the attitude."""
+    rebuild, _ = _to_body(model, state, wk, wk.fnode, wk.nlist[2])
+    if rebuild:
+        _build_candidates(model, state, wk)
+    n = wk.ncand[0]
+    u_c, _, _ = segment_contacts(model, state, wk, wk.cand[:n], wk.cmask[:n], 0.0, False, 0)
+    return u_c
 
 
 @njit(cache=True)
@@ -970,26 +986,37 @@ def advance(model, state, n_steps, dt, ratio=1):
 
 
 @njit(cache=True)
-def energies(model, state):
-    """(net kinetic, rope elastic, contact stored) [J] of the state; held nodes are at rest."""
+def net_energies(model, state):
+    """(net kinetic, rope elastic) [J] of the state; held nodes are at rest."""
     x, v = state.x, state.v
     ke = 0.0
     for i in range(x.shape[0]):
         if model.free[i]:
             ke += 0.5 * model.mass[i] * (v[i, 0] ** 2 + v[i, 1] ** 2 + v[i, 2] ** 2)
     pe = 0.0
-    wk = _work(model, x.shape[0])
-    wk.r[:, :] = quat_to_matrix(state.mq)
-    _to_body(model, state, wk, wk.fnode, x.shape[0])
-    near = np.empty(model.seg.shape[0], np.int64)
-    nn = 0
     for e in range(model.seg.shape[0]):
         if not state.alive[e]:
             continue
         i, j = model.seg[e, 0], model.seg[e, 1]
         ln = np.sqrt((x[j, 0] - x[i, 0]) ** 2 + (x[j, 1] - x[i, 1]) ** 2 + (x[j, 2] - x[i, 2]) ** 2)
         pe += rope_elastic_energy(ln - (model.rest[e] - model.off[e]), model.k[e])
-        if _near_missile(model, wk.pbn[i], wk.pbn[j]):
+    return ke, pe
+
+
+@njit(cache=True)
+def energies(model, state):
+    """(net kinetic, rope elastic, contact stored) [J] of any state, every segment near the missile
+    tested. After ``advance`` the contact stored energy is also in state.acc[A_U_CONTACT], from the
+    call's candidate list (the same value, at a fraction of the cost: ``_stored_contact_energy``)."""
+    x = state.x
+    ke, pe = net_energies(model, state)
+    wk = _work(model, x.shape[0])
+    wk.r[:, :] = quat_to_matrix(state.mq)
+    _to_body(model, state, wk, wk.fnode, x.shape[0])
+    near = np.empty(model.seg.shape[0], np.int64)
+    nn = 0
+    for e in range(model.seg.shape[0]):
+        if state.alive[e] and _near_missile(model, wk.pbn[model.seg[e, 0]], wk.pbn[model.seg[e, 1]]):
             near[nn] = e
             nn += 1
     uc, _, _ = segment_contacts(model, state, wk, near[:nn], np.zeros(0, np.int64), 0.0, False, 0)

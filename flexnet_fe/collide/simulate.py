@@ -189,9 +189,16 @@ def build(net: HeldNet, missile: Missile, cfg: CollideConfig, gravity: float, lo
     return Setup(km, start, used, seg_idx, free_full, boundary, reach, step)
 
 
-def _energy_terms(km: M.CollideModel, st: M.CollideState, missile: Missile, inertia: np.ndarray) -> dict:
-    """The energy columns (without the balance) of the state [J]."""
-    ke_n, pe_n, pe_c = K.energies(km, st)
+def _energy_terms(km: M.CollideModel, st: M.CollideState, missile: Missile, inertia: np.ndarray,
+                  advanced: bool = True) -> dict:
+    """The energy columns (without the balance) of the state [J]. ``advanced``: the state is the end
+    of a successful ``kernel.advance`` call, whose contact stored energy is in acc[A_U_CONTACT] (the
+    same value as ``kernel.energies`` computes, to the last bit); otherwise it is computed."""
+    if advanced:
+        ke_n, pe_n = K.net_energies(km, st)
+        pe_c = float(st.acc[M.A_U_CONTACT])
+    else:
+        ke_n, pe_n, pe_c = K.energies(km, st)
     w_b = km.inv_inertia @ (quat_to_matrix(st.mq).T @ st.mh)
     acc = st.acc
     return {"missile_kinetic_j": 0.5 * missile.mass * float(st.mv @ st.mv) + 0.5 * float(w_b @ inertia @ w_b),
@@ -482,7 +489,7 @@ class _Recorder:
     def __init__(self, km, st, missile, inertia, cfg, start, n_out):
         self.km, self.st, self.missile, self.inertia, self.cfg, self.start = km, st, missile, inertia, cfg, start
         self.cols = {c: np.zeros(n_out + 1) for c in HISTORY_COLUMNS}
-        e = _energy_terms(km, st, missile, inertia)
+        e = _energy_terms(km, st, missile, inertia, advanced=False)
         self.e0 = _balance(e)
         self.ke_m0 = e["missile_kinetic_j"]
         self.v0, self.q0 = st.mv.copy(), st.mq.copy()

@@ -104,3 +104,23 @@ def test_automatic_ratio_bounds_the_springs_phase():
     assert far_ratio(cfg, dt_spring=1e-3, dt=1e-8) == FAR_RATIO_CAP
     assert far_ratio(cfg, dt_spring=1e-8, dt=1e-8) == 1
     assert far_ratio(CollideConfig(far_net_ratio=3), dt_spring=1e-3, dt=1e-8) == 3
+
+
+@pytest.mark.parametrize("ratio", [1, 16])
+def test_contact_energy_after_a_call_equals_the_full_scan(radar, log, scenes, ratio):
+    # Reference: ``kernel.energies``, which tests every live segment near the missile (the second
+    # model). After each call of the 0.6 m net impact, the contact stored energy the call leaves in
+    # acc[A_U_CONTACT] (from its candidate list) must equal it to the last bit: the same pairs, in
+    # the same order, the full scan adding only zeros besides. Some calls must end in contact.
+    net = scenes.flat_net(0.6, 0.05)
+    cfg = CollideConfig(net_source="flat_taut", duration=1e-3, aim_point=(0.03, 0.02), crop=False, air=False)
+    setup = build(net, radar, cfg, 9.81, log, False)
+    km, s = setup.model, setup.start
+    st = M.new_state(net.x[setup.used], km.seg.shape[0], km.fin_half.shape[0], s.x_cg, s.v_cg, s.q)
+    in_contact = 0
+    for _ in range(int(round(T_END / (17 * setup.step.dt)))):
+        assert K.advance(km, st, 17, setup.step.dt, ratio) == M.OK
+        full = K.energies(km, st)[2]
+        assert st.acc[M.A_U_CONTACT] == full
+        in_contact += full > 0.0
+    assert in_contact >= 10  # measured: 19 of the 469 calls, at both ratios
