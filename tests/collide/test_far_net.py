@@ -21,13 +21,18 @@ def _copy(st):
 T_END = 3e-3
 
 
-def _impact(radar, log, scenes, ratio):
-    """A 0.6 m flat net hit at 500 m/s for T_END [s], advanced in calls of 255 steps (one output interval) with far-net windows of ``ratio``."""
+def _scene(radar, log, scenes):
+    """(model, state, setup) of a 0.6 m flat net about to be hit at 500 m/s."""
     net = scenes.flat_net(0.6, 0.05)
     cfg = CollideConfig(net_source="flat_taut", duration=1e-3, aim_point=(0.03, 0.02), crop=False, air=False)
     setup = build(net, radar, cfg, 9.81, log, False)
     km, s = setup.model, setup.start
-    st = M.new_state(net.x[setup.used], km.seg.shape[0], km.fin_half.shape[0], s.x_cg, s.v_cg, s.q)
+    return km, M.new_state(net.x[setup.used], km.seg.shape[0], km.fin_half.shape[0], s.x_cg, s.v_cg, s.q), setup
+
+
+def _impact(radar, log, scenes, ratio):
+    """The 0.6 m flat net hit at 500 m/s for T_END [s], advanced in calls of 255 steps (one output interval) with far-net windows of ``ratio``."""
+    km, st, setup = _scene(radar, log, scenes)
     dt = setup.step.dt
     for _ in range(int(round(T_END / (255 * dt)))):
         assert K.advance(km, st, 255, dt, ratio) == M.OK
@@ -112,11 +117,7 @@ def test_contact_energy_after_a_call_equals_the_full_scan(radar, log, scenes, ra
     # model). After each call of the 0.6 m net impact, the contact stored energy the call leaves in
     # acc[A_U_CONTACT] (from its candidate list) must equal it to the last bit: the same pairs, in
     # the same order, the full scan adding only zeros besides. Some calls must end in contact.
-    net = scenes.flat_net(0.6, 0.05)
-    cfg = CollideConfig(net_source="flat_taut", duration=1e-3, aim_point=(0.03, 0.02), crop=False, air=False)
-    setup = build(net, radar, cfg, 9.81, log, False)
-    km, s = setup.model, setup.start
-    st = M.new_state(net.x[setup.used], km.seg.shape[0], km.fin_half.shape[0], s.x_cg, s.v_cg, s.q)
+    km, st, setup = _scene(radar, log, scenes)
     in_contact = 0
     for _ in range(int(round(T_END / (17 * setup.step.dt)))):
         assert K.advance(km, st, 17, setup.step.dt, ratio) == M.OK
