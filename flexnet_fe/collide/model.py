@@ -33,7 +33,7 @@ A_PEN_INT = 21  # largest penetration within the call [m]
 A_DISS_AIR = 22  # work done against the air (collide.air), whole run [J]
 A_IMP_AIR = 23  # impulse of the air on the net, whole run, W [N s] (23, 24, 25)
 A_FAST_SEG_STEPS = 26  # Σ over the steps of the number of fast segments (kernel, far net), whole run
-A_U_CONTACT = 27  # contact stored energy Σ U(δ) at the end of the last call [J] (kernel.energies)
+A_U_CONTACT = 27  # contact stored energy Σ U(δ) at the end of the last call [J] (kernel._stored_contact_energy)
 N_ACC = 28
 
 # -- status codes of ``kernel.advance`` ---------------------------------------------------------
