@@ -27,6 +27,7 @@ from enum import Enum
 import numpy as np
 
 from flexnet_fe.missile.config import FinMaterial, FinSetConfig, MissileConfig, NoseShape
+from flexnet_fe.missile.planform import trapezoid
 
 EDGE_NAMES: tuple[str, str, str, str] = ("root", "leading_edge", "tip", "trailing_edge")
 """Fin edge k joins corner k to corner k+1 (mod 4); these are also the mesh physical groups."""
@@ -187,9 +188,7 @@ def build_fin(name: str, kind: FinKind, index: int, fs: FinSetConfig, roll_deg: 
     e2 = np.array([-1.0, 0.0, 0.0])
     n = np.cross(e1, e2)
     origin = np.array([-fs.root_le_station, 0.0, 0.0]) + body_radius * e1
-    v_tip_le = fs.span * np.tan(lam)
-    uv = np.array([[0.0, fs.root_chord], [0.0, 0.0], [fs.span, v_tip_le],
-                   [fs.span, v_tip_le + fs.tip_chord]])
+    uv = trapezoid(fs.span, fs.root_chord, fs.tip_chord, fs.leading_edge_sweep_deg)
     corners = origin + uv[:, :1] * e1 + uv[:, 1:] * e2
     return Fin(name=name, kind=kind, index=index, roll_angle=float(phi),
                root_chord=fs.root_chord, tip_chord=fs.tip_chord, span=fs.span,

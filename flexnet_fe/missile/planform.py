@@ -29,7 +29,7 @@ tip LE, tip TE; ``missile.geometry``)."""
 
 def trapezoid(span: float, root_chord: float, tip_chord: float, sweep_deg: float) -> np.ndarray:
     """The fin trapezoid (4, 2) [m]: root TE, root LE, tip LE, tip TE, counter-clockwise in (u, v)
-    (``missile.geometry.build_fin``)."""
+    (``missile.geometry.build_fin`` builds every fin from it)."""
     v_le = span * np.tan(np.deg2rad(sweep_deg))
     return np.array([[0.0, root_chord], [0.0, 0.0], [span, v_le], [span, v_le + tip_chord]])
 

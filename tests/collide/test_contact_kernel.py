@@ -12,6 +12,8 @@ import pytest
 from flexnet_fe.collide import kernel as K
 from flexnet_fe.collide import model as M
 from flexnet_fe.contact.stiffness import crossed_cylinders_stiffness
+from flexnet_fe.missile.build import build_missile
+from flexnet_fe.missile.config import MissileConfig
 
 R = 2.25e-3  # rope radius [m]
 H = 3.0e-3  # wing half-thickness [m]
@@ -271,8 +273,6 @@ def test_rounded_tip_corner_is_met_later_by_its_offset(radar, scenes):
     # along that bisector towards the tip leading-edge corner, must first touch later by
     # (ρ/sin(θ/2) − ρ)/v than at the sharp corner (first touch within the 0.1 µs sampling), and
     # both runs must close their energy to the step error, as above.
-    from flexnet_fe.missile.build import build_missile
-    from flexnet_fe.missile.config import MissileConfig
     rho, v, dt = 0.01, 50.0, 1e-8
     rounded = build_missile(MissileConfig(preset="radar", wings={"tip_corner_radius": rho}))
     fin = radar.fin("wing_1")
