@@ -65,8 +65,8 @@ class FinLoads:
 @dataclass(frozen=True)
 class CollisionResult:
     """What a collision run produced (data). history: {column name with unit: (nt,) array};
-    loads: fin loads; snapshots: (times [s] (k,), positions [m] (k, n, 3)) of the whole net,
-    missile apex [m] (k, 3) and attitude (k, 4); summary: the ``collide`` section;
+    loads: fin loads; snapshots: (times [s] (k,), positions [m] and velocities [m/s] (k, n, 3)) of
+    the whole net (nodes outside the crop keep x and v = 0), missile apex [m] (k, 3) and attitude (k, 4); summary: the ``collide`` section;
     step: the time-step choice; free: (n,) bool crop mask; alive: (m,) bool intact segments;
     net: the held net the run used (split per ``rope_split``; n, m count its nodes and segments)."""
 
@@ -74,6 +74,7 @@ class CollisionResult:
     loads: FinLoads
     snap_t: np.ndarray
     snap_x: np.ndarray
+    snap_v: np.ndarray
     snap_apex: np.ndarray
     snap_q: np.ndarray
     summary: dict
@@ -302,7 +303,7 @@ def simulate(net: HeldNet, missile: Missile, cfg: CollideConfig, gravity: float,
     alive[setup.seg_idx] = st.alive
     snaps = run.snaps
     return CollisionResult(history=rec.cols, loads=loads, snap_t=np.array(snaps[0]), snap_x=np.array(snaps[1]),
-                           snap_apex=np.array(snaps[2]), snap_q=np.array(snaps[3]), summary=summary, step=step,
+                           snap_v=np.array(snaps[4]), snap_apex=np.array(snaps[2]), snap_q=np.array(snaps[3]), summary=summary, step=step,
                            free=setup.free_full, alive=alive, net=net)
 
 
@@ -423,7 +424,8 @@ def _drive(d: _Drive, n_min: int, n_max: int, snap_at: set, log) -> _Run:
     st, setup, cfg, km = d.st, d.setup, d.cfg, d.setup.model
     limit = edge_piece_limit(km.rope_radius, km.fin_half) or np.inf
     x_full = np.array(d.net.x, dtype=np.float64)
-    snaps = ([0.0], [x_full.copy()], [setup.start.apex.copy()], [st.mq.copy()])
+    v_full = np.zeros_like(x_full)  # the held net is at rest (HeldNet)
+    snaps = ([0.0], [x_full.copy()], [setup.start.apex.copy()], [st.mq.copy()], [v_full.copy()])
     run = _Run(0, "max_duration" if cfg.max_duration is not None else "duration", [0], [], snaps)
     names = part_names(d.missile)
     with progress_bar(n_max, "collide") as bar:
@@ -447,8 +449,8 @@ def _drive(d: _Drive, n_min: int, n_max: int, snap_at: set, log) -> _Run:
                 d.rec.cols["contacts"][k], d.rec.cols["apex_along_path_m"][k] - d.missile.length,
                 float((st.x[km.free] @ setup.start.direction).max()), cfg.end_clearance)
             if k in snap_at or over or k == n_max:
-                x_full[setup.used] = st.x
-                for lst, val in zip(snaps, (t, x_full.copy(), apex.copy(), st.mq.copy())):
+                x_full[setup.used], v_full[setup.used] = st.x, st.v
+                for lst, val in zip(snaps, (t, x_full.copy(), apex.copy(), st.mq.copy(), v_full.copy())):
                     lst.append(val)
             bar.update(1)
             if over:

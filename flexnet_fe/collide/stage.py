@@ -90,9 +90,9 @@ def write_outputs(res: CollisionResult, springs: np.ndarray, rest: np.ndarray, k
     for i, t in enumerate(res.snap_t):
         x = res.snap_x[i]
         ln = np.linalg.norm(x[springs[:, 1]] - x[springs[:, 0]], axis=1)
-        tension = k * np.maximum(ln - rest, 0.0)  # elastic part (velocities are not kept in snapshots)
+        tension = k * np.maximum(ln - rest, 0.0)  # elastic part (the dashpots' share is not kept)
         name = f"net_{i:04d}.vtu"
-        write_vtu(snap / name, x, np.zeros_like(x), springs, tension)
+        write_vtu(snap / name, x, res.snap_v[i], springs, tension)
         net_entries.append((float(t), f"snapshots/{name}"))
         r = quat_to_matrix(res.snap_q[i])
         pts = res.snap_apex[i] + wire_pts @ r.T

@@ -25,6 +25,13 @@ def test_momentum_balance_is_round_off(radar, log, scenes):
     assert s["dv_over_v"] > 1e-7  # the missile did lose momentum to the net
     # ~4e4 steps × a few ulp of the momentum (|p| ≈ 1.2e5 N s) relative to Δp ≈ 1e-3 |p|
     assert s["momentum_error_rel"] < 1e-8, s["momentum_error_rel"]
+    # The snapshots keep the net's velocities: Σ m v of the last one is the history's net momentum
+    # at that time (the same state, two writers; round-off of a sum over ~1e3 nodes).
+    k = int(np.argmin(np.abs(res.history["t_s"] - res.snap_t[-1])))
+    p_snap = res.net.model.mass @ res.snap_v[-1]
+    p_hist = np.array([res.history[f"net_momentum_{a}_ns"][k] for a in "xyz"])
+    assert np.abs(p_hist).max() > 0.0
+    np.testing.assert_allclose(p_snap, p_hist, rtol=1e-9, atol=1e-12 * np.abs(p_hist).max())
 
 
 def _fin_edge_scene(scenes):
