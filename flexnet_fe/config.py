@@ -88,6 +88,15 @@ class Case(Section):
                     raise ValueError(f"stage '{stage.value}' needs a [{table}] table")
         return self
 
+    @model_validator(mode="after")
+    def _bearing_modulus_is_the_nets(self) -> "Case":
+        """shell.bearing_rope_modulus left out = the net's contact modulus (one quantity, one value;
+        resolved.json shows it)."""
+        if self.shell is not None and self.shell.bearing_rope_modulus is None and self.net is not None:
+            shell = self.shell.model_copy(update={"bearing_rope_modulus": self.net.contact_modulus})
+            object.__setattr__(self, "shell", shell)  # frozen model: set once, while validating
+        return self
+
 
 def _dotted(loc: tuple[Any, ...], data: Any) -> str:
     """Dotted field path from a pydantic error location. Walks the raw data alongside, so the

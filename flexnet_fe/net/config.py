@@ -52,6 +52,11 @@ class RopeNet(Section):
         "LINK167-style offset of one bar [m]: the bar is taut when its length exceeds its rest "
         "length − offset; > 0 pretension, < 0 slack (paper: not given, 0)"))
 
+    @property
+    def contact_modulus(self) -> float:
+        """The rope's modulus across its section [Pa]: transverse_modulus, else youngs_modulus."""
+        return float(self.youngs_modulus if self.transverse_modulus is None else self.transverse_modulus)
+
 
 class TractionNet(RopeNet):
     """Square traction net pulled open by four corner masses (paper §III-A, §V-A).

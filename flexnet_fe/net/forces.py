@@ -140,6 +140,6 @@ def rope_material(net_cfg) -> RopeMaterial:
     """The ``RopeMaterial`` of a ``[net]`` table (``net.config.RopeNet``)."""
     e = float(net_cfg.youngs_modulus)
     return RopeMaterial(e, float(net_cfg.poisson_ratio), float(net_cfg.density), float(net_cfg.rope_diameter),
-                        e if net_cfg.transverse_modulus is None else float(net_cfg.transverse_modulus),
+                        net_cfg.contact_modulus,
                         math.inf if net_cfg.breaking_strength is None else float(net_cfg.breaking_strength),
                         float(net_cfg.damping_ratio), str(net_cfg.damping_law))

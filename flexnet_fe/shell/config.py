@@ -133,9 +133,10 @@ class ShellConfig(Section):
                                  "size and peaks within their error estimate, 1.01-1.36x the "
                                  "step per fin, 1.14x fewer DOF-steps on radar_traction, 2-3x "
                                  "the meshing time (docs/performance.md, issue 10)")
-    bearing_rope_modulus: Positive = Field(
-        1.0e11, description="rope transverse modulus for the Hertz contact pressure of face loads "
-                            "(keep equal to net.transverse_modulus) [Pa]")
+    bearing_rope_modulus: Positive | None = Field(
+        None, description="rope transverse modulus for the Hertz contact pressure of face loads; None = "
+                          "the net's contact modulus, as the collision's contact stiffness uses it "
+                          "(net.transverse_modulus, else net.youngs_modulus) [Pa]")
     bearing_allowable_factor: Positive = Field(
         1.5, description="bearing allowable = factor × fin yield strength (bearing yield of Al "
                          "7075-T6 at e/D = 2 is about 1.5 × tensile yield, MMPDS) [-]")

@@ -124,7 +124,8 @@ class FinZones:
         return hotspot.excluded_points(self.times, t, self.sample, self.points, self.radius)
 
     def bearing(self, model: ShellModel, rope_modulus: float) -> hotspot.Bearing:
-        """Largest closed-form bearing/contact stress of the fin's events."""
+        """Largest closed-form bearing/contact stress of the fin's events (rope_modulus [Pa]:
+        ``shell.bearing_rope_modulus``)."""
         if not len(self.points):
             return hotspot.Bearing(0.0, 0.0, "", None, 0.0)
         from flexnet_fe.shell.transfer import _boundary_segments, _nearest_on_boundary
@@ -598,6 +599,9 @@ def run_shell(shell: ShellConfig, fins: list[FinSpec], contacts_npz: Path,
     unknown = [n for n in contacts.fin_names if n not in {f.name for f in fins}]
     if unknown:
         raise CaseError(str(contacts_npz), "fin_names", f"fin(s) {unknown} not in the missile model")
+    if contacts.fin.size and shell.bearing_rope_modulus is None:
+        raise CaseError("[shell]", "bearing_rope_modulus", "not given, and no [net] table to take the rope's "
+                                                           "contact modulus from; the fins have contact loads")
     end_time = _end_time(shell, contacts, acc_t)
     specs = select_fins(shell, fins, contacts)
     jobs = [_setup_fin(shell, spec, contacts, acc_t, acc, stage_dir, end_time, log, comm)

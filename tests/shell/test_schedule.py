@@ -23,7 +23,7 @@ from flexnet_fe.shell.schedule import FinWindow, fin_window, run_all, window_ste
 from flexnet_fe.shell.stage import run_shell
 
 LOG = logging.getLogger("flexnet.test.schedule")
-CFG = ShellConfig(end_margin=3e-4, history_interval=1e-5, field_interval=2.5e-4)
+CFG = ShellConfig(end_margin=3e-4, history_interval=1e-5, field_interval=2.5e-4, bearing_rope_modulus=1e11)
 
 
 def make_inputs(d: Path) -> list[FinSpec]:

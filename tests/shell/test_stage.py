@@ -12,7 +12,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from flexnet_fe.errors import NumericalError
+from flexnet_fe.config import load_case
+from flexnet_fe.errors import CaseError, NumericalError
 from flexnet_fe.io import read_history_csv, write_history_csv
 from flexnet_fe.shell import stage as stage_mod
 from flexnet_fe.shell.config import FinSpec, ShellConfig
@@ -56,7 +57,7 @@ def _log():
     return log
 
 
-CFG = ShellConfig(end_margin=1e-3, history_interval=1e-5, field_interval=2.5e-4)
+CFG = ShellConfig(end_margin=1e-3, history_interval=1e-5, field_interval=2.5e-4, bearing_rope_modulus=1e11)
 
 
 def test_stage_outputs(tmp_path):
@@ -194,7 +195,10 @@ def test_runs_on_the_missile_meshers_fin(tmp_path):
              row_start=np.arange(12, dtype=np.int64), fin=np.zeros(11, np.int32),
              point=np.tile(le_mid, (11, 1)), force=np.outer(np.sin(np.pi * t / 2e-4), 5e3 * fin.n),
              width=np.full(11, 5e-3))
-    s = run_shell(ShellConfig(end_time=5e-4), fin_specs([fin], paths), tmp_path / "c.npz", None,
+    with pytest.raises(CaseError, match="bearing_rope_modulus"):  # contact loads, no rope modulus: refused
+        run_shell(ShellConfig(end_time=5e-4), fin_specs([fin], paths), tmp_path / "c.npz", None, tmp_path / "shell",
+                  _log())
+    s = run_shell(ShellConfig(end_time=5e-4, bearing_rope_modulus=1e11), fin_specs([fin], paths), tmp_path / "c.npz", None,
                   tmp_path / "shell", _log())
     r = s[fin.name]
     assert np.isfinite(r["peak_von_mises_pa"]) and r["peak_von_mises_pa"] > 1e6
@@ -243,6 +247,15 @@ def test_shell_load_option_runs_a_pressure_history_on_a_fin(tmp_path):
     assert abs(err) < 0.10 and abs(err) <= s["plate"]["peak_error_estimate_rel"], (err, vm_ref)
     with pytest.raises(ValidationError, match="supports"):
         ShellConfig(supports={"root": "glued"})
+
+
+def test_bearing_modulus_is_the_nets_unless_given():
+    # One quantity, one value: a case that leaves shell.bearing_rope_modulus out takes the modulus
+    # the collision's contact stiffness uses (net.transverse_modulus, else net.youngs_modulus).
+    case, _ = load_case(ROOT / "cases" / "radar_traction", ["net.transverse_modulus=3e9"])
+    assert case.shell.bearing_rope_modulus == 3e9 == case.net.contact_modulus
+    case, _ = load_case(ROOT / "cases" / "radar_traction", ["shell.bearing_rope_modulus=2e9"])
+    assert case.shell.bearing_rope_modulus == 2e9 and case.net.contact_modulus != 2e9
 
 
 @pytest.mark.parametrize("scheme", ["full_quad", "blossom"])
