@@ -6,6 +6,7 @@ cost side by side; and the chart of docs/img/collide_rope_resolution.png.
         [--pieces 1.4e-3 0.7e-3 0.35e-3] [--law segment] [--set KEY=VALUE ...]
     PYTHONPATH=. .venv/bin/python benchmarks/collide_rope_resolution.py plot OUT.jsonl PNG
     PYTHONPATH=. .venv/bin/python benchmarks/collide_rope_resolution.py table OUT.jsonl
+    PYTHONPATH=. .venv/bin/python benchmarks/collide_rope_resolution.py friction OUT.jsonl PNG
 
 ``run`` appends one JSON row per point to OUT.jsonl (case, law, piece [m], Δv/v, CFC peak [m/s²],
 per-fin impulse [N s], contact duration [s], energy error, steps, dt [s], wall and CPU [s], the
@@ -13,7 +14,10 @@ machine's load); DEPLOY_DIR is the ``deploy/`` folder of a run of CASE (the held
 draws each headline's deviation from the finest segment-law point of its case against the piece
 length (log axis); fins that take less than 2 % of their case's total fin impulse are skipped
 (their relative scatter says nothing about the headlines). ``table`` prints the rows as the Markdown
-table of docs/collide_convergence.md. Results: docs/collide_convergence.md.
+table of docs/collide_convergence.md. ``friction`` draws Δv/v and the rudders' impulses against the
+piece length, one line per friction coefficient (the rows' ``collide.friction_coefficient=`` override,
+0.2 where none): the rudder-tip friction lock of docs/collide_convergence.md, twelfth pass.
+Results: docs/collide_convergence.md.
 """
 from __future__ import annotations
 
@@ -112,6 +116,45 @@ def plot(args) -> None:
     fig.savefig(args.png, dpi=110)
 
 
+def _mu(row: dict) -> float:
+    """The row's friction coefficient: its ``collide.friction_coefficient=`` override, else the case's 0.2."""
+    for o in row["overrides"]:
+        if o.startswith("collide.friction_coefficient="):
+            return float(o.split("=", 1)[1])
+    return 0.2
+
+
+def friction(args) -> None:
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.ticker import NullFormatter
+
+    rows = [json.loads(line) for line in open(args.jsonl) if line.strip()]
+    ticks = sorted({1e3 * r["piece_m"] for r in rows})
+    fig, axes = plt.subplots(1, 3, figsize=(14.0, 4.6))
+    for mu, colour in zip(sorted({_mu(r) for r in rows}), ("tab:blue", "black", "tab:red", "tab:green")):
+        mine = sorted((r for r in rows if _mu(r) == mu), key=lambda r: r["piece_m"])
+        mm = [1e3 * r["piece_m"] for r in mine]
+        axes[0].semilogx(mm, [1e4 * r["dv_over_v"] for r in mine], "-o", color=colour, label=f"μ = {mu:g}")
+        for ax, fin in ((axes[1], "rudder_2"), (axes[2], "rudder_3")):
+            ax.semilogx(mm, [r["fin_impulse_ns"][fin] for r in mine], "-o", color=colour, label=f"μ = {mu:g}")
+    for ax, what in zip(axes, ("Δv/v [1e-4]", "rudder_2 impulse [N s]", "rudder_3 impulse [N s]")):
+        ax.set_xlabel("rope piece length at the fins, fin_piece_length [mm]")
+        ax.set_ylabel(what)
+        ax.set_xticks(ticks)
+        ax.set_xticklabels([f"{p:g}" for p in ticks])
+        ax.xaxis.set_minor_formatter(NullFormatter())
+        ax.axvline(0.7, color="0.6", lw=0.8, ls="--")
+        ax.grid(True, which="both", lw=0.3)
+        ax.legend(fontsize=8)
+    fig.suptitle("radar × traction: the rudder-tip friction lock. From μ = 0.2 the strands on rudders 2 and 3 "
+                 "hang on the leading-edge/tip corner;\nhow long is resolved only by rope pieces ≤ 0.1 mm "
+                 "(dashed: the case's 0.7 mm)", fontsize=10)
+    fig.tight_layout()
+    fig.savefig(args.png, dpi=110)
+
+
 def _fins(impulse: dict[str, float], kind: str) -> str:
     """The impulses [N s] of fins ``kind``_1..4, 0 where a fin took none."""
     return " ".join(f"{impulse.get(f'{kind}_{i}', 0.0):.3f}" for i in range(1, 5))
@@ -149,8 +192,11 @@ def main() -> None:
     p.add_argument("png")
     t = sub.add_parser("table")
     t.add_argument("jsonl")
+    f = sub.add_parser("friction")
+    f.add_argument("jsonl")
+    f.add_argument("png")
     args = ap.parse_args()
-    {"run": run, "plot": plot, "table": table}[args.cmd](args)
+    {"run": run, "plot": plot, "table": table, "friction": friction}[args.cmd](args)
 
 
 if __name__ == "__main__":

@@ -28,11 +28,12 @@ from flexnet_fe.net.forces import CD_FRICTION, C_CROSS, segment_aero_force
 
 
 @njit(cache=True, error_model="numpy")
-def segment_air(model, state, f, e, u, length, dt):
-    """Adds the air force on live segment e, Eq. (5)–(8), half to each end node's row of
-    f [N] (n, 3); books its work and impulse. u unit vector i → j (3 floats), length [m] the
-    segment's current length, dt [s] the step. A no-op (no arithmetic on f) when
-    ``model.air_density`` is 0 (air off)."""
+def segment_air(model, state, f, e, u, length, dt, scale):
+    """Adds ``scale`` × the air force on live segment e, Eq. (5)–(8), half to each end node's row of
+    f [N] (n, 3); books its work and impulse over dt [s], the time the force acts (scale × the
+    step the caller multiplies f by: the far net's air impulse of several windows,
+    ``kernel._far_window``). u unit vector i → j (3 floats), length [m] the segment's current
+    length. A no-op (no arithmetic on f) when ``model.air_density`` is 0 (air off)."""
     if model.air_density == 0.0:
         return
     if e >= model.diameter.shape[0]:  # a hand-built model with air but no diameters (no bounds check in numba)
@@ -41,12 +42,13 @@ def segment_air(model, state, f, e, u, length, dt):
     i, j = model.seg[e, 0], model.seg[e, 1]
     vm0, vm1, vm2 = 0.5 * (v[i, 0] + v[j, 0]), 0.5 * (v[i, 1] + v[j, 1]), 0.5 * (v[i, 2] + v[j, 2])
     fx, fy, fz, _ = segment_aero_force(u, length, (vm0, vm1, vm2), model.air_density, model.diameter[e])
-    f[i, 0] += 0.5 * fx
-    f[i, 1] += 0.5 * fy
-    f[i, 2] += 0.5 * fz
-    f[j, 0] += 0.5 * fx
-    f[j, 1] += 0.5 * fy
-    f[j, 2] += 0.5 * fz
+    h = 0.5 * scale
+    f[i, 0] += h * fx
+    f[i, 1] += h * fy
+    f[i, 2] += h * fz
+    f[j, 0] += h * fx
+    f[j, 1] += h * fy
+    f[j, 2] += h * fz
     acc = state.acc
     acc[A_DISS_AIR] -= (fx * vm0 + fy * vm1 + fz * vm2) * dt
     acc[A_IMP_AIR] += fx * dt

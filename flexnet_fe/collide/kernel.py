@@ -59,9 +59,10 @@ call is cut into windows of ``ratio`` steps. At a window's start (``_far_window`
 largest speed relative to the missile's frame v_max gives the bound d = FAR_BOUND_FACTOR × v_max ×
 window; a live segment whose clearance exceeds d cannot touch any part within the window (the
 clearance is 1-Lipschitz in its ends' displacements, as for the candidate list) and is slow; the
-others are fast, and so are their nodes. The slow segments' forces (rope, air; and gravity on the
+others are fast, and so are their nodes. The slow segments' forces (rope; and gravity on the
 slow nodes) act as one impulse of the whole window, window × F, at its start (their dissipation
-booked over the window); the slow nodes feel nothing else, so they move over the whole window at
+booked over the window); the air on every live segment, slow or fast, acts likewise as one impulse
+per ``model.air_every`` windows (its rate is ~1e-4 per window, ``simulate.air_windows``); the slow nodes feel nothing else, so they move over the whole window at
 once, and the fast nodes take that impulse and then advance step by step with the fast segments'
 forces and the contacts. Momentum is exact (every impulse has its reaction); a slow spring's
 error is O(window) and is measured against single rate (tests/collide/test_far_net.py,
@@ -104,7 +105,7 @@ from numba import njit
 
 from flexnet_fe.collide.air import segment_air
 from flexnet_fe.collide.fpu import FTZ_DAZ, get_mxcsr, set_mxcsr
-from flexnet_fe.collide.model import (A_BROKEN, A_CROSS, A_DISS_CONTACT, A_DISS_FRICTION, A_DISS_ROPE,
+from flexnet_fe.collide.model import (A_AIR_PAID, A_BROKEN, A_CROSS, A_DISS_CONTACT, A_DISS_FRICTION, A_DISS_ROPE,
                                       A_FAST_SEG_STEPS, A_FCONTACT, A_IMP_B, A_NBROKEN, A_NCONTACT, A_PEN,
                                       A_PEN_INT, A_PEN_RATIO, A_PHELD, A_SKIPPED, A_TUN_PART, A_TUN_SPEED,
                                       A_TUN_STEP, A_U_CONTACT, A_WORK_GRAVITY, FAR, NONFINITE, OK,
@@ -641,10 +642,11 @@ def _book_penetration(acc, delta, ratio):
 
 
 @njit(cache=True)
-def _rope_forces(model, state, wk, dt, segs, count):
-    """Rope tensions of the segments ``segs[:count]`` into wk.f (Eq. (1)–(4)) and, with
-    ``collide.air``, the rope's air force (Eq. (5)–(8), ``collide.air``), their dissipation booked
-    over dt [s]; breaks segments past their breaking stretch."""
+def _rope_forces(model, state, wk, dt, segs, count, air):
+    """Rope tensions of the segments ``segs[:count]`` into wk.f (Eq. (1)–(4)) and, with ``air``
+    and ``collide.air``, the rope's air force (Eq. (5)–(8), ``collide.air``), their dissipation
+    booked over dt [s]; breaks segments past their breaking stretch. (With the far net in windows
+    the air comes from ``_air_impulse`` instead: ``air`` False.)"""
     x, v, seg, f = state.x, state.v, model.seg, wk.f
     diss = state.acc[A_DISS_ROPE]  # a local sum (as ``_integrate``); nothing else writes it here
     for c in range(count):
@@ -672,8 +674,25 @@ def _rope_forces(model, state, wk, dt, segs, count):
         # the dashpot's share T − K s: also when T is cut to 0 (a stretched rope contracting so
         # fast that K s + c l̇ < 0 cannot push), the dashpot then takes the spring's −K s l̇ > 0
         diss += (t - model.k[e] * max(stretch, 0.0)) * ldot * dt
-        segment_air(model, state, f, e, (u0, u1, u2), lf, dt)  # collide.air (no-op when off)
+        if air:
+            segment_air(model, state, f, e, (u0, u1, u2), lf, dt, 1.0)  # collide.air (no-op when off)
     state.acc[A_DISS_ROPE] = diss
+
+
+@njit(cache=True)
+def _air_impulse(model, state, f, scale, dt):
+    """``scale`` × the air force (Eq. (5)–(8), ``collide.air``) on every live segment into f [N]
+    (n, 3), booked as acting over dt [s] (``_far_window``: the impulse of the next air_every
+    windows)."""
+    x, seg = state.x, model.seg
+    for e in range(seg.shape[0]):
+        if not state.alive[e]:
+            continue
+        i, j = seg[e, 0], seg[e, 1]
+        d0, d1, d2 = x[j, 0] - x[i, 0], x[j, 1] - x[i, 1], x[j, 2] - x[i, 2]
+        lf = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+        if lf > 0.0:
+            segment_air(model, state, f, e, (d0 / lf, d1 / lf, d2 / lf), lf, dt, scale)
 
 
 @njit(cache=True)
@@ -861,7 +880,13 @@ def _far_window(model, state, wk, alln, w, dt, full):
     for i in range(x.shape[0]):
         for k in range(3):
             f[i, k] = 0.0 if isfast[i] else model.mass[i] * g[k]
-    _rope_forces(model, state, wk, tw, wk.sseg, wk.nlist[1])
+    _rope_forces(model, state, wk, tw, wk.sseg, wk.nlist[1], False)
+    if model.air_density > 0.0 and acc[A_AIR_PAID] < 0.5 * tw:
+        # the air on every live segment (slow and fast), one impulse for air_every windows: its
+        # rate is ~1e-4 per window (simulate: air_every), so its force hardly changes meanwhile
+        _air_impulse(model, state, f, model.air_every, model.air_every * tw)
+        acc[A_AIR_PAID] += model.air_every * tw
+    acc[A_AIR_PAID] -= tw
     wg = acc[A_WORK_GRAVITY]
     for i in range(x.shape[0]):
         if not model.free[i]:
@@ -881,9 +906,10 @@ def _far_window(model, state, wk, alln, w, dt, full):
 
 
 @njit(cache=True)
-def _fine_step(model, state, wk, dt, step, mv0):
+def _fine_step(model, state, wk, dt, step, mv0, air):
     """One step of the fast segments and nodes (all of them at single rate) and the missile: rope
-    forces, contacts, symplectic Euler, dissipation at the mean velocity. Returns the status."""
+    forces (with their air when ``air``: single rate), contacts, symplectic Euler, dissipation at
+    the mean velocity. Returns the status."""
     f, fmt, w_w, acc = wk.f, wk.fmt, wk.w_w, state.acc
     wk.r[:, :] = quat_to_matrix(state.mq)
     r = wk.r
@@ -900,7 +926,7 @@ def _fine_step(model, state, wk, dt, step, mv0):
         return FAR
     if rebuild:
         _build_candidates(model, state, wk)
-    _rope_forces(model, state, wk, dt, wk.fseg, wk.nlist[0])
+    _rope_forces(model, state, wk, dt, wk.fseg, wk.nlist[0], air)
     status, ncon = _step_contacts(model, state, wk, dt, step)
     if status != OK:
         return status
@@ -941,7 +967,7 @@ def _advance(model, state, n_steps, dt, ratio):
             if _far_window(model, state, wk, alln, w, dt, step == 0) != OK:
                 return FAR
         for s in range(step, step + w):
-            status = _fine_step(model, state, wk, dt, s, mv0)
+            status = _fine_step(model, state, wk, dt, s, mv0, ratio <= 1)
             if status != OK:
                 return status
         step += w

@@ -34,7 +34,8 @@ A_DISS_AIR = 22  # work done against the air (collide.air), whole run [J]
 A_IMP_AIR = 23  # impulse of the air on the net, whole run, W [N s] (23, 24, 25)
 A_FAST_SEG_STEPS = 26  # Σ over the steps of the number of fast segments (kernel, far net), whole run
 A_U_CONTACT = 27  # contact stored energy Σ U(δ) at the end of the last call [J] (kernel._stored_contact_energy)
-N_ACC = 28
+A_AIR_PAID = 28  # far net: time the last air impulses covered beyond the current window's start [s] (kernel._far_window)
+N_ACC = 29
 
 # -- status codes of ``kernel.advance`` ---------------------------------------------------------
 OK, TUNNEL, NONFINITE, FAR = 0, 1, 2, 3
@@ -62,7 +63,9 @@ class CollideModel(NamedTuple):
     Broad phase: nose_cones (nc, 2) (r0 [m], k [-]) cones ρ ≤ r0 + k s that contain the body
         (``missile.shapes.nose_cones``; station s = −x_b; empty: the bounding cylinder alone).
     Air (``collide.air``): air_density ρ [kg/m³] (0: no air, the default); diameter [m] (ns,)
-        each segment's aerodynamic diameter (Eq. (5)–(8), ``collide.air``; empty when ρ = 0).
+        each segment's aerodynamic diameter (Eq. (5)–(8), ``collide.air``; empty when ρ = 0);
+        air_every (≥ 1): with the far net in windows (``advance`` ratio > 1) the air acts on every
+        live segment as one impulse per air_every windows (``kernel._far_window``).
     """
 
     seg: np.ndarray
@@ -100,6 +103,7 @@ class CollideModel(NamedTuple):
     air_density: float = 0.0
     diameter: np.ndarray = np.zeros(0)
     nose_cones: np.ndarray = np.zeros((0, 2))
+    air_every: int = 1
 
 
 class CollideState(NamedTuple):
