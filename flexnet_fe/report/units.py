@@ -93,7 +93,8 @@ COUNT_KEYS = frozenset({"steps", "dofs", "contacts", "snapshots", "iterations", 
                         "rope_split"})                 # pieces per rope segment near the path
 """Last key segments that are counts."""
 
-COUNT_SUFFIXES = ("_nodes", "_cells", "_segments", "_crossings", "_unresolved", "_steps", "_count", "_frames")
+COUNT_SUFFIXES = ("_nodes", "_cells", "_segments", "_crossings", "_unresolved", "_steps", "_count", "_frames",
+                  "_windows")
 """Suffixes of counts (``free_nodes``, ``segment_crossings_unresolved``)."""
 
 RATIO_PATTERNS = ("_over_", "_ratio", "_fraction", "_factor", "_scale", "damage", "effectiveness",
