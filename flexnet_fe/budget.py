@@ -161,21 +161,27 @@ def collide_cost(case, file) -> StageCost:
     few steps there), else an interior knot (2ρA l0); the most
     segments at a node 4 (a rotary net's hub: its warps). Memory: the process, the held net and
     its work arrays (≈ 100 floats per node and per segment, as deploy; not measured separately)
-    and ≈ 40 history columns per output row; disk: snapshots (60 B per node) × snapshots."""
+    and ≈ 40 history columns per output row; disk: snapshots (60 B per node) × snapshots. With
+    ``resolution_check`` the steps add the second impact's, at half the pieces."""
     cc, net = case.collide, case.net
     nodes, segs, l0, c = check_net(net, file)
     energy = 0.5 * _missile_mass(case.missile) * cc.impact_speed * cc.impact_speed
     _finite(file, "collide.impact_speed", "missile kinetic energy ½mv² [J]", energy)
     dt = _collide_step(case, l0)
+    steps = cc.end_time / dt
+    if cc.resolution_check:  # the check's second impact, at half the pieces (collide.resolution)
+        half = cc.model_copy(update={"fin_piece_length": 0.5 * cc.fin_piece_length})
+        steps += cc.end_time / _collide_step(case.model_copy(update={"collide": half}), l0)
     rows = cc.end_time / cc.output_interval  # up to the cap: the run goes on while the contact does
     mem = BASE_PROCESS + 100 * F8 * (nodes + segs) + 40 * F8 * rows
-    cost = StageCost("collide", nodes, 3 * nodes + 6, cc.end_time / dt, mem,
+    cost = StageCost("collide", nodes, 3 * nodes + 6, steps, mem,
                      60 * (nodes + segs) * cc.snapshots + 40 * 25 * rows,
                      {"nodes": "net.mesh_size", "steps": "collide.impact_speed",
                       "memory": _mem_driver(100 * F8 * (nodes + segs), 40 * F8 * rows, "net.mesh_size",
                                             "collide.output_interval"), "disk": "collide.output_interval"})
     cost.detail = (f"{rows:.3g} history rows at most = collide.max_duration (or duration) / collide.output_interval, "
-                   f"dt ≈ {dt:.3g} s (collide step rule, rope_split {cc.rope_split}, fin_piece_length {cc.fin_piece_length})")
+                   f"dt ≈ {dt:.3g} s (collide step rule, rope_split {cc.rope_split}, fin_piece_length {cc.fin_piece_length})"
+                   + ("; steps include the resolution check's impact at half the pieces" if cc.resolution_check else ""))
     return cost
 
 

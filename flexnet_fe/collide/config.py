@@ -91,6 +91,13 @@ class CollideConfig(Section):
         "benchmarks/collide_edge_lab.py is the summary's edge_piece_limit_m); None = no refinement at the fins"))
     fin_split_margin: NonNegative = Field(0.05, description=(
         "distance from a fin's strip within which rope is cut to fin_piece_length [m]"))
+    resolution_check: bool = Field(False, description=(
+        "also run the impact with fin_piece_length halved and report how far each headline moves "
+        "(summary resolution_check: Δv, CFC peak, impulse, contact duration, per-fin impulse); a "
+        "move beyond resolution_tolerance is a warning (collide.resolution). Costs about 2.5x the "
+        "collision"))
+    resolution_tolerance: Positive = Field(0.02, description=(
+        "largest relative move of a headline under resolution_check that is not flagged [-]"))
     allow_tunnelling: bool = Field(False, description=(
         "finish a run in which a rope centre line reaches a part's core (the rope passes through) and "
         "report the skipped impulse, instead of stopping"))
@@ -123,6 +130,8 @@ class CollideConfig(Section):
             raise ValueError("contact_stiffness is only used with stiffness_rule = 'given'")
         if self.output_interval > self.duration:
             raise ValueError("output_interval must not exceed duration")
+        if self.resolution_check and self.fin_piece_length is None:
+            raise ValueError("resolution_check needs fin_piece_length (the check halves it)")
         if self.max_duration is not None and self.max_duration < self.duration:
             raise ValueError(f"max_duration ({self.max_duration:g} s) must not be less than duration "
                              f"({self.duration:g} s)")

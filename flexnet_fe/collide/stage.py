@@ -28,6 +28,7 @@ import numpy as np
 
 from flexnet_fe.atmosphere import Air
 from flexnet_fe.collide.config import CollideConfig
+from flexnet_fe.collide.resolution import resolution_moves
 from flexnet_fe.collide.scene import held_net
 from flexnet_fe.collide.simulate import CollisionResult, simulate
 from flexnet_fe.io import write_history_csv
@@ -55,6 +56,8 @@ def run_collide(net_cfg, deploy_cfg, missile_cfg: MissileConfig, collide_cfg: Co
              "aim (%.3g, %.3g) m", net.model.kind, net.source.value, net.model.n_nodes, missile.name,
              missile.mass, collide_cfg.impact_speed, collide_cfg.incidence_angle, *collide_cfg.aim_point)
     res = simulate(net, missile, collide_cfg, air.gravity, log, air_density=air.density)
+    if collide_cfg.resolution_check:
+        _check_resolution(res.summary, net, missile, collide_cfg, air, log)
     net = res.net  # split near the path per collide.rope_split
     write_outputs(res, net.model.springs[res.alive], net.rest_length[res.alive],
                   net.model.stiffness[res.alive], missile, stage_dir)
@@ -70,6 +73,23 @@ def run_collide(net_cfg, deploy_cfg, missile_cfg: MissileConfig, collide_cfg: Co
              s["max_penetration_m"], s["momentum_error_rel"], s["energy_error_rel"], s["broken_segments"], s["steps"], s["dt_s"],
              s["wall_s"])
     return s
+
+
+def _check_resolution(summary: dict, net, missile: Missile, cfg: CollideConfig, air: Air,
+                      log: logging.Logger) -> None:
+    """``[collide] resolution_check``: the impact again with the rope pieces at the fins halved
+    (``collide.resolution``); adds ``summary['resolution_check']`` and its warnings."""
+    piece = 0.5 * cfg.fin_piece_length
+    log.info("collide: resolution check: the impact again with rope pieces of %.3g mm at the fins", 1e3 * piece)
+    fine = simulate(net, missile, cfg.model_copy(update={"fin_piece_length": piece, "resolution_check": False}),
+                    air.gravity, log, air_density=air.density, n_snapshots=2).summary
+    section, warnings = resolution_moves(summary, fine, piece, cfg.resolution_tolerance)
+    section["wall_s"] = fine["wall_s"]
+    summary["resolution_check"] = section
+    summary["warnings"].extend(warnings)
+    log.info("collide: resolution check (%.3g mm): Δv/v %+.2f %%, CFC peak %+.2f %%, impulse %+.2f %%; flagged: %s",
+             1e3 * piece, 100 * section["dv_over_v_move_rel"], 100 * section["peak_accel_move_rel"],
+             100 * section["impulse_move_rel"], ", ".join(section["flagged"]) or "none")
 
 
 def write_outputs(res: CollisionResult, springs: np.ndarray, rest: np.ndarray, k: np.ndarray,

@@ -29,7 +29,7 @@ def test_collide_steps_match_the_stage(tmp_path, split):
     cfg = type(case.collide).model_validate({**case.collide.model_dump(), "net_source": "flat_taut",
                                              "duration": 2e-4, "snapshots": 2, "rope_split": split,
                                              "aim_point": (0.025, 0.025), "fin_piece_length": None,
-                                             "max_duration": None})
+                                             "max_duration": None, "resolution_check": False})
     case = case.model_copy(update={"net": net, "collide": cfg})
     estimated = collide_cost(case, file).steps
     summary = run_collide(net, None, case.missile, cfg, isa(case.atmosphere.altitude), None, tmp_path,
