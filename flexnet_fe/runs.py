@@ -195,10 +195,12 @@ class _SignalState:
 
 _SIG = _SignalState()
 
-REDELIVER_S = 2.0
+REDELIVER_S = 0.25
 """If an Interrupted raised by the handler is swallowed (Python ignores exceptions raised inside
-``__del__`` and weakref callbacks, where a signal can land), the signal is delivered again after
-this many seconds [s], until some code reports it handled."""
+``__del__`` and weakref callbacks, where a signal can land — seen in an import's module-lock
+callback), the signal is delivered again after this many seconds [s], until some code reports it
+handled. Short, so that the stage the user interrupted is still the one running (at 2 s a 1.3 s
+deploy finished first and the interrupt came only after it: CI, 2026-11-27)."""
 
 
 def _on_signal(signum, frame):
