@@ -120,6 +120,11 @@ def fin_verdict(name: str, res: dict, yield_pa: float | None, yield_what: str) -
         marginal=ms is not None and err is not None and math.isfinite(ms) and abs(ms) <= err)
 
 
+def _unprefixed(text: str, stage: str) -> str:
+    """A stage's warning without its own leading "<stage>: " (the report shows the stage beside it)."""
+    return text[len(stage) + 2:] if text.startswith(f"{stage}: ") else text
+
+
 def _walk_warnings(stage: str, node: Any, path: str, out: list[Warning_]) -> None:
     """Collect ``warnings`` lists, tunnelling flags, energy errors over tolerance and
     ``converged: false`` flags at any depth of a summary section."""
@@ -129,7 +134,7 @@ def _walk_warnings(stage: str, node: Any, path: str, out: list[Warning_]) -> Non
     tol = _num(node.get("energy_tolerance_rel")) or ENERGY_TOL_REL
     for key, v in node.items():
         if key in WARNING_KEYS and isinstance(v, list):
-            out.extend(Warning_(stage, f"{str(w)}{where}") for w in v)
+            out.extend(Warning_(stage, f"{_unprefixed(str(w), stage)}{where}") for w in v)
         elif key in TUNNELLING_KEYS and v is True:
             n = node.get("segment_crossings_unresolved")
             extra = f": {n} rope-segment crossings not resolved" if isinstance(n, int) else ""
