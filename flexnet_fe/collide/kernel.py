@@ -62,8 +62,8 @@ clearance is 1-Lipschitz in its ends' displacements, as for the candidate list) 
 others are fast, and so are their nodes. The slow segments' forces (rope; and gravity on the
 slow nodes) act as one impulse of the whole window, window × F, at its start (their dissipation
 booked over the window); the air on every live segment, slow or fast, acts likewise as one impulse
-per ``model.air_every`` windows (its rate is ~1e-4 per window, ``simulate.air_windows``); the slow nodes feel nothing else, so they move over the whole window at
-once, and the fast nodes take that impulse and then advance step by step with the fast segments'
+per ``model.air_every`` windows (its rate is ~3e-4 per window, ``simulate.air_windows``); the slow
+nodes feel nothing else, so they move over the whole window at once, and the fast nodes take that impulse and then advance step by step with the fast segments'
 forces and the contacts. Momentum is exact (every impulse has its reaction); a slow spring's
 error is O(window) and is measured against single rate (tests/collide/test_far_net.py,
 docs/performance.md "Far net"). The bound is checked, not assumed: a node of a slow segment that
@@ -883,7 +883,7 @@ def _far_window(model, state, wk, alln, w, dt, full):
     _rope_forces(model, state, wk, tw, wk.sseg, wk.nlist[1], False)
     if model.air_density > 0.0 and acc[A_AIR_PAID] < 0.5 * tw:
         # the air on every live segment (slow and fast), one impulse for air_every windows: its
-        # rate is ~1e-4 per window (simulate: air_every), so its force hardly changes meanwhile
+        # rate is ~3e-4 per window (simulate.air_windows), so its force hardly changes meanwhile
         _air_impulse(model, state, f, model.air_every, model.air_every * tw)
         acc[A_AIR_PAID] += model.air_every * tw
     acc[A_AIR_PAID] -= tw

@@ -66,8 +66,8 @@ class FinLoads:
 class CollisionResult:
     """What a collision run produced (data). history: {column name with unit: (nt,) array};
     loads: fin loads; snapshots: (times [s] (k,), positions [m] and velocities [m/s] (k, n, 3)) of
-    the whole net (nodes outside the crop keep x and v = 0), missile apex [m] (k, 3) and attitude (k, 4); summary: the ``collide`` section;
-    step: the time-step choice; free: (n,) bool crop mask; alive: (m,) bool intact segments;
+    the whole net (nodes outside the crop keep their held x and v = 0), missile apex [m] (k, 3)
+    and attitude (k, 4); summary: the ``collide`` section; step: the time-step choice; free: (n,) bool crop mask; alive: (m,) bool intact segments;
     net: the held net the run used (split per ``rope_split``; n, m count its nodes and segments)."""
 
     history: dict
@@ -305,8 +305,8 @@ def simulate(net: HeldNet, missile: Missile, cfg: CollideConfig, gravity: float,
     alive[setup.seg_idx] = st.alive
     snaps = run.snaps
     return CollisionResult(history=rec.cols, loads=loads, snap_t=np.array(snaps[0]), snap_x=np.array(snaps[1]),
-                           snap_v=np.array(snaps[4]), snap_apex=np.array(snaps[2]), snap_q=np.array(snaps[3]), summary=summary, step=step,
-                           free=setup.free_full, alive=alive, net=net)
+                           snap_v=np.array(snaps[4]), snap_apex=np.array(snaps[2]), snap_q=np.array(snaps[3]),
+                           summary=summary, step=step, free=setup.free_full, alive=alive, net=net)
 
 
 FAR_RATIO_CAP = 16
