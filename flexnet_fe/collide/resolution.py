@@ -11,6 +11,8 @@ A small move does not prove convergence (it is one halving), a large one disprov
 
 from __future__ import annotations
 
+import math
+
 SHARE_MIN = 0.02
 """Fins carrying less than this share of the total fin impulse (in the finer run) are not checked:
 their relative move says nothing about the headlines."""
@@ -21,9 +23,10 @@ HEADLINES = (("dv_over_v", "dv_over_v_move_rel", "Δv/v"), ("peak_accel_mps2", "
 
 
 def _move(coarse: float, fine: float) -> float:
-    """(fine − coarse) / |fine| [-]; 0 when both are 0."""
+    """(fine − coarse) / |fine| [-]; 0 when both are 0, and −1 (all of it gone, sign of −coarse) when
+    only the finer run is 0 — always finite, so summary.json stays strict JSON."""
     if fine == 0.0:
-        return 0.0 if coarse == 0.0 else float("inf")
+        return 0.0 if coarse == 0.0 else -math.copysign(1.0, coarse)
     return (fine - coarse) / abs(fine)
 
 

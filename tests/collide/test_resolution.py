@@ -37,6 +37,9 @@ def test_moves_are_relative_to_the_finer_run_and_flag_beyond_the_tolerance():
     assert section["fin_impulse_move_rel"] == {"wing_1": 0.0, "rudder_2": pytest.approx(1 / 3)}
     assert section["flagged"] == ["Δv/v", "rudder_2 impulse"] and len(warnings) == 2
     assert "+7.0 %" in warnings[0] and "0.7 → 0.35 mm" in warnings[0]
+    # a headline the finer run does not have at all (no contact left): −100 %, finite for strict JSON
+    gone, _ = resolution_moves(coarse, {**fine, "duration_s": 0.0}, 0.35e-3, 0.02)
+    assert gone["duration_move_rel"] == -1.0 and "contact duration" in gone["flagged"]
 
 
 def test_check_needs_a_piece_length_to_halve():
