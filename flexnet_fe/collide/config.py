@@ -89,6 +89,11 @@ class CollideConfig(Section):
         "fin_split_margin of a fin's strip (the fin's trace swept along the path) is cut into equal pieces no "
         "longer than this, after rope_split (collide.refine; the edge rule (r + h/2)/3 of "
         "benchmarks/collide_edge_lab.py is the summary's edge_piece_limit_m); None = no refinement at the fins"))
+    fin_piece_chord: Positive | None = Field(None, description=(
+        "during the run, cut every rope segment that pressed on a fin in an output interval while its "
+        "chord (its current, stretched length) was longer than this into equal pieces no longer than it "
+        "[m] (collide.adapt; the stretch of the paper's 1 MPa rope makes a piece cut at the start ~10x "
+        "longer where it presses); None = no cutting during the run"))
     fin_split_margin: NonNegative = Field(0.05, description=(
         "distance from a fin's strip within which rope is cut to fin_piece_length [m]"))
     resolution_check: bool = Field(False, description=(

@@ -524,6 +524,8 @@ def _apply(model, state, wk, slot, fin, delta, s, dt):
         for k in range(3):
             state.fin_pt[fs, k] += fmag * dt * qb[k]
         state.fin_w[fs] += fmag * dt
+        c0, c1, c2 = state.x[j, 0] - state.x[i, 0], state.x[j, 1] - state.x[i, 1], state.x[j, 2] - state.x[i, 2]
+        state.fin_len[fs] += fmag * dt * np.sqrt(c0 * c0 + c1 * c1 + c2 * c2)
     return fmag
 
 
@@ -796,7 +798,7 @@ def _far_check(model, state, wk, alln):
 @njit(cache=True)
 def _far_split(model, state, wk, d, full):
     """Split the live segments (positions in B: wk.pbn) into fast (clearance ≤ d [m]: may touch a
-    part within the window) and slow, in increasing order, with the fast nodes; the segments that
+    part within the window; or ``model.always_fast``) and slow, in increasing order, with the fast nodes; the segments that
     turn slow have their contact slots reset (they cannot touch) and every node of a slow segment
     gets the bound d. ``full``: evaluate ``_clearance`` for every segment and keep it in wk.cseg
     with the positions in wk.pfull; otherwise a segment whose kept clearance, less the larger of
@@ -804,6 +806,8 @@ def _far_split(model, state, wk, d, full):
     without a new evaluation (the first window of each call is full)."""
     nf = model.fin_half.shape[0]
     seg, alive, pbn, isfast, cseg, pfull = model.seg, state.alive, wk.pbn, wk.isfast, wk.cseg, wk.pfull
+    pinned = model.always_fast
+    n_pinned = pinned.shape[0]
     n = pbn.shape[0]
     dmov = wk.dfull
     for i in range(n):
@@ -830,7 +834,7 @@ def _far_split(model, state, wk, d, full):
             if c <= d:
                 c = _clearance(model.bbox, model.rope_radius, wk.fin_pl, wk.fin_rh, model.nose_cones, pbn[i],
                                pbn[j], d)
-        if c <= d:
+        if c <= d or (e < n_pinned and pinned[e]):
             wk.fseg[nfs] = e
             nfs += 1
             isfast[i] = True

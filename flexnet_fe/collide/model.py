@@ -35,7 +35,8 @@ A_IMP_AIR = 23  # impulse of the air on the net, whole run, W [N s] (23, 24, 25)
 A_FAST_SEG_STEPS = 26  # Σ over the steps of the number of fast segments (kernel, far net), whole run
 A_U_CONTACT = 27  # contact stored energy Σ U(δ) at the end of the last call [J] (kernel._stored_contact_energy)
 A_AIR_PAID = 28  # far net: time the last air impulses covered beyond the current window's start [s] (kernel._far_window)
-N_ACC = 29
+A_REFINE = 29  # energy taken out by cutting rope pieces during the run, −ΔE, whole run [J] (collide.adapt)
+N_ACC = 30
 
 # -- status codes of ``kernel.advance`` ---------------------------------------------------------
 OK, TUNNEL, NONFINITE, FAR = 0, 1, 2, 3
@@ -66,6 +67,9 @@ class CollideModel(NamedTuple):
         each segment's aerodynamic diameter (Eq. (5)–(8), ``collide.air``; empty when ρ = 0);
         air_every (≥ 1): with the far net in windows (``advance`` ratio > 1) the air acts on every
         live segment as one impulse per air_every windows (``kernel._far_window``).
+    Far net: always_fast (ns,) bool, segments stepped every step whatever their clearance — the
+        pieces cut during the run (``collide.adapt``), stiffer than the rest, so the far window
+        stays set by the uncut rope (empty: none).
     """
 
     seg: np.ndarray
@@ -104,6 +108,7 @@ class CollideModel(NamedTuple):
     diameter: np.ndarray = np.zeros(0)
     nose_cones: np.ndarray = np.zeros((0, 2))
     air_every: int = 1
+    always_fast: np.ndarray = np.zeros(0, np.bool_)
 
 
 class CollideState(NamedTuple):
@@ -117,7 +122,9 @@ class CollideState(NamedTuple):
         −1: its centre line crossed the core, tunnelling episode).
     Fin loads of the current call, one slot per (segment, fin), slot = e·nf + fin:
         fin_imp [N s] (ns·nf, 3) impulse on the fin in B; fin_pt [N s m] (ns·nf, 3) impulse-
-        weighted contact point in B; fin_w [N s] (ns·nf,) Σ |impulse|; touched (ns·nf,) int64 the
+        weighted contact point in B; fin_w [N s] (ns·nf,) Σ |impulse|; fin_len [N s m] (ns·nf,)
+        impulse-weighted chord length |x_j − x_i| of the segment while it pressed (its current,
+        stretched length: the edge-resolution guard, ``simulate.edge_resolution``); touched (ns·nf,) int64 the
         slots written in this call, ntouched (1,) int64 their count (``simulate`` reads and clears them).
     part_imp [N s] (1 + nf, 2): per part (row 0 the body, 1 + fin), the whole run's Σ |F_n| dt
         (normal-force magnitude, damping included) and Σ |F_t| dt (friction magnitude): scalar
@@ -137,6 +144,7 @@ class CollideState(NamedTuple):
     fin_imp: np.ndarray
     fin_pt: np.ndarray
     fin_w: np.ndarray
+    fin_len: np.ndarray
     touched: np.ndarray
     ntouched: np.ndarray
     part_imp: np.ndarray
@@ -151,5 +159,5 @@ def new_state(x: np.ndarray, n_seg: int, n_fin: int, mx, mv, mq) -> CollideState
         x=np.ascontiguousarray(x, dtype=np.float64), v=np.zeros((len(x), 3)), alive=np.ones(n_seg, np.bool_),
         mx=np.array(mx, dtype=np.float64), mv=np.array(mv, dtype=np.float64), mq=np.array(mq, dtype=np.float64),
         mh=np.zeros(3), vk=np.zeros(n_seg * (1 + n_fin)), fin_imp=np.zeros((n_fin_slots, 3)),
-        fin_pt=np.zeros((n_fin_slots, 3)), fin_w=np.zeros(n_fin_slots), touched=np.zeros(n_fin_slots, np.int64),
+        fin_pt=np.zeros((n_fin_slots, 3)), fin_w=np.zeros(n_fin_slots), fin_len=np.zeros(n_fin_slots), touched=np.zeros(n_fin_slots, np.int64),
         ntouched=np.zeros(1, np.int64), part_imp=np.zeros((1 + n_fin, 2)), acc=np.zeros(N_ACC))

@@ -4,7 +4,8 @@ when the rope pieces at the fins are halved.
 The rope's resolution at the fins is the collision's one knob the headlines are known to depend on
 (docs/collide_convergence.md): on radar × traction a strand's friction lock on the rudder tips is
 resolved only by pieces ≤ 0.1 mm, and at the case's 0.7 mm Δv reads 8 % low with nothing in the
-run to say so. The check runs the impact a second time with ``fin_piece_length`` / 2 and reports,
+run to say so. The check runs the impact a second time with ``fin_piece_length`` / 2 (and
+``fin_piece_chord`` / 2 when set: the pieces cut where they press, ``collide.adapt``) and reports,
 per headline, the relative move (fine − coarse) / fine; a move beyond the tolerance is a warning.
 A small move does not prove convergence (it is one halving), a large one disproves it.
 """
@@ -45,7 +46,7 @@ def resolution_moves(coarse: dict, fine: dict, piece: float, tolerance: float) -
             flagged.append(name)
             warnings.append(f"collide: {name} moves {100 * move:+.1f} % when the rope pieces at the fins are halved "
                             f"({2e3 * piece:.3g} → {1e3 * piece:.3g} mm; > {100 * tolerance:g} %): not converged in "
-                            f"the rope's resolution (collide.fin_piece_length; docs/collide_convergence.md)")
+                            f"the rope's resolution (collide.fin_piece_length, fin_piece_chord; docs/collide_convergence.md)")
 
     for key, out, name in HEADLINES:
         section[out] = _move(float(coarse[key]), float(fine[key]))

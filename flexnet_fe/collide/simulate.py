@@ -12,7 +12,8 @@ impulse of every contact is kept exactly).
 Energy (history columns ending in ``_j``): missile kinetic (translation + rotation), net
 kinetic, rope elastic, contact stored (Σ K δ^(m+1)/(m+1)), dissipated by rope damping, by
 contact damping, by friction, by the air (``dissipated_air_j``, 0 unless ``collide.air``),
-released by broken ropes, work of gravity and at the crop boundary (zero: held nodes do not
+released by broken ropes, taken out by cutting rope pieces during the run (``rope_refinement_j``,
+``collide.adapt``), work of gravity and at the crop boundary (zero: held nodes do not
 move), and ``energy_balance_j`` = (sum of the stored and dissipated terms − external work) − its
 initial value. Momentum: missile, free net, the impulse taken by the held nodes and the air's
 impulse on the net (``air_impulse_*_ns``; W, [N s]); missile + net + held − air − gravity
@@ -34,10 +35,11 @@ from flexnet_fe.collide import model as M
 from flexnet_fe.collide.config import CollideConfig
 from flexnet_fe.collide.crop import (active_segments, boundary_motion, boundary_nodes, crop_reach, free_nodes,
                                      wave_speed)
+from flexnet_fe.collide.adapt import cut_counts, cut_live
 from flexnet_fe.collide.refine import refine_near_fins, split_near_path
 from flexnet_fe.collide.metrics import FinContacts, MissileHistory, collision_metrics
 from flexnet_fe.collide.scene import HeldNet, MissileStart, fin_planes, place_missile
-from flexnet_fe.collide.timestep import StepChoice, choose_step, contact_stiffness
+from flexnet_fe.collide.timestep import StepChoice, choose_step, contact_stiffness, spring_limit
 from flexnet_fe.contact.law import DAMPING_CODE, DampingModel, hysteresis_factor
 from flexnet_fe.contact.restitution import restitution_check
 from flexnet_fe.errors import FlexnetError, NumericalError
@@ -93,7 +95,8 @@ ENERGY_GROWTH_SAMPLES consecutive samples stops with a NumericalError (a blow-up
 ENERGY_GROWTH_SAMPLES = 3
 
 ENERGY_COLUMNS = ("missile_kinetic_j", "net_kinetic_j", "rope_elastic_j", "contact_stored_j", "rope_damping_j",
-                  "contact_damping_j", "friction_j", "dissipated_air_j", "broken_release_j", "gravity_work_j",
+                  "contact_damping_j", "friction_j", "dissipated_air_j", "broken_release_j", "rope_refinement_j",
+                  "gravity_work_j",
                   "crop_boundary_work_j", "energy_balance_j")
 HISTORY_COLUMNS = (
     "t_s", "accel_body_x_mps2", "accel_body_y_mps2", "accel_body_z_mps2", "accel_mag_mps2",
@@ -133,6 +136,8 @@ class Setup:
     boundary: np.ndarray
     reach: float
     step: StepChoice
+    m_reach: float = math.inf
+    """[kg] the lightest node the missile can reach (the step's contact limit)"""
 
 
 def build(net: HeldNet, missile: Missile, cfg: CollideConfig, gravity: float, log: logging.Logger,
@@ -162,7 +167,8 @@ def build(net: HeldNet, missile: Missile, cfg: CollideConfig, gravity: float, lo
     k_body, k_fin = contact_stiffness(cfg, rope.radius, rope.transverse_modulus, rope.poisson_ratio, half_min,
                                       missile.radius)
     n_seg = int(np.bincount(seg.ravel()).max())
-    step = choose_step(cfg, k, mass[seg[:, 0]], mass[seg[:, 1]], float(model.mass[reachable].min()), n_seg,
+    m_reach = float(model.mass[reachable].min())
+    step = choose_step(cfg, k, mass[seg[:, 0]], mass[seg[:, 1]], m_reach, n_seg,
                        rope.radius, half_min, max(k_body, k_fin))
     g_vec = np.array([0.0, -gravity, 0.0]) if cfg.gravity else np.zeros(3)
     km = M.CollideModel(
@@ -187,7 +193,7 @@ def build(net: HeldNet, missile: Missile, cfg: CollideConfig, gravity: float, lo
              "K_fin = %.4g N/m^%.2g (%s, rope E_t = %.3g Pa)", int(free_full.sum()), model.n_nodes, reach,
              seg.shape[0], model.n_springs, k_body, k_fin, cfg.contact_exponent, cfg.stiffness_rule.value,
              rope.transverse_modulus)
-    return Setup(km, start, used, seg_idx, free_full, boundary, reach, step)
+    return Setup(km, start, used, seg_idx, free_full, boundary, reach, step, m_reach)
 
 
 def _energy_terms(km: M.CollideModel, st: M.CollideState, missile: Missile, inertia: np.ndarray,
@@ -206,7 +212,7 @@ def _energy_terms(km: M.CollideModel, st: M.CollideState, missile: Missile, iner
             "net_kinetic_j": ke_n, "rope_elastic_j": pe_n, "contact_stored_j": pe_c,
             "rope_damping_j": acc[M.A_DISS_ROPE], "contact_damping_j": acc[M.A_DISS_CONTACT],
             "friction_j": acc[M.A_DISS_FRICTION], "dissipated_air_j": acc[M.A_DISS_AIR],
-            "broken_release_j": acc[M.A_BROKEN],
+            "broken_release_j": acc[M.A_BROKEN], "rope_refinement_j": acc[M.A_REFINE],
             "gravity_work_j": acc[M.A_WORK_GRAVITY], "crop_boundary_work_j": 0.0}
 
 
@@ -217,15 +223,17 @@ def _balance(e: dict) -> float:
 
 
 def _take_fin_events(km: M.CollideModel, st: M.CollideState):
-    """(fin (k,), point [m] (k, 3) B, impulse [N s] (k, 3) B, segment (k,)) of the fin-load slots
-    written in the last call; the slots are cleared."""
+    """(fin (k,), point [m] (k, 3) B, impulse [N s] (k, 3) B, segment (k,), chord [m] (k,)) of the
+    fin-load slots written in the last call (chord: the segment's impulse-weighted current length
+    while it pressed); the slots are cleared."""
     nt = int(st.ntouched[0])
     fs = st.touched[:nt].copy()
     nf = km.fin_half.shape[0]
-    out = (fs % nf, st.fin_pt[fs] / st.fin_w[fs, None], st.fin_imp[fs].copy(), fs // nf)
+    out = (fs % nf, st.fin_pt[fs] / st.fin_w[fs, None], st.fin_imp[fs].copy(), fs // nf, st.fin_len[fs] / st.fin_w[fs])
     st.fin_imp[fs] = 0.0
     st.fin_pt[fs] = 0.0
     st.fin_w[fs] = 0.0
+    st.fin_len[fs] = 0.0
     st.ntouched[0] = 0
     return out
 
@@ -292,17 +300,20 @@ def simulate(net: HeldNet, missile: Missile, cfg: CollideConfig, gravity: float,
     snap_at = set(np.unique(np.round(np.linspace(0, n_min, cfg.snapshots if n_snapshots is None
                                                   else n_snapshots)).astype(int)).tolist())
     x_start = st.x.copy()
-    run = _drive(_Drive(setup, st, rec, cfg, net, missile, dt, n_sub, ratio), n_min, n_max, snap_at, log)
+    run = _drive(_Drive(setup, st, rec, cfg, net, missile, dt, n_sub, ratio, dt_scale), n_min, n_max, snap_at, log)
     rec.truncate(run.n_done)
     loads = _fin_loads(missile, cfg, run.n_done, run.row_start, run.ev_rows, net.rope.diameter)
-    steps = n_sub * run.n_done
-    summary = rec.summary(setup, loads, x_start, dt, steps, time.perf_counter() - t_wall)
+    steps = run.steps
+    summary = rec.summary(setup, loads, x_start, min(dt, run.dt_min), steps, time.perf_counter() - t_wall)
     _end_summary(summary, run, rec, cfg, net)
+    km, st = run.km, run.st
     summary.update(_air_summary(km, st, cfg, air_ratio))
     summary.update(far_net_ratio=ratio, far_net_dt_s=dt * ratio, near_net_segment_share=(
         1.0 if ratio == 1 else float(st.acc[M.A_FAST_SEG_STEPS]) / max(steps * km.seg.shape[0], 1)))
+    summary.update(fin_piece_chord_m=cfg.fin_piece_chord, cut_segments=run.cut_segments, cut_nodes=run.cut_nodes,
+                   rope_refinement_j=float(st.acc[M.A_REFINE]))
     alive = np.ones(net.model.n_springs, dtype=bool)
-    alive[setup.seg_idx] = st.alive
+    alive[setup.seg_idx] = st.alive[:setup.seg_idx.size]  # (a cut segment: its first piece)
     snaps = run.snaps
     return CollisionResult(history=rec.cols, loads=loads, snap_t=np.array(snaps[0]), snap_x=np.array(snaps[1]),
                            snap_v=np.array(snaps[4]), snap_apex=np.array(snaps[2]), snap_q=np.array(snaps[3]),
@@ -389,16 +400,20 @@ def _air_summary(km: M.CollideModel, st: M.CollideState, cfg: CollideConfig, rat
 
 def edge_piece_limit(rope_radius: float, fin_half: np.ndarray) -> float | None:
     """min over the fins of (r + h/2)/3 [m] (rope radius r, fin half-thickness h/2 (nf,)): the
-    piece length at which a rope hitting a rounded fin edge at 500 m/s has its impulse within 2 %
-    of converged (benchmarks/collide_edge_lab.py, docs/collide_convergence.md — a measured rule,
-    not a law); None without fins."""
+    longest chord a rope piece may press on a fin with — a measured rule, not a law. Radar ×
+    traction converges (Δv within 0.25 % of its finest run, every fin within 1.8 %) when its pieces
+    press at chords ≤ 1.24 mm (1.42 mm on its rudders), and reads 2.4 % low at 2.45 mm (docs/
+    collide_convergence.md, thirteenth pass); a single rope across a swept edge
+    (benchmarks/collide_edge_lab.py) is within 2 % already at ~7 mm chords. None without fins."""
     return float((rope_radius + np.min(fin_half)) / 3.0) if len(fin_half) else None
 
 
 def edge_resolution(piece_max: float, rope_radius: float, fin_half: np.ndarray, imp_long: float = 0.0,
                     imp_all: float = 0.0) -> dict:
     """Summary keys of the rope's resolution at the fin edges: ``fin_contact_piece_max_m`` the
-    longest rope piece [m] that pressed on a fin, ``edge_piece_limit_m`` (:func:`edge_piece_limit`),
+    longest rope piece [m] that pressed on a fin, as long as it was then (its chord, stretched by
+    the rope's tension: the paper's 1 MPa rope stretches its pieces up to ~10× at the fins, docs/
+    collide_convergence.md, thirteenth pass), ``edge_piece_limit_m`` (:func:`edge_piece_limit`),
     and ``fin_impulse_share_long_pieces`` = imp_long / imp_all, the share of the fins' Σ |impulse|
     [N s] that pieces longer than the limit delivered (0 when no fin was loaded)."""
     return {"fin_contact_piece_max_m": float(piece_max), "edge_piece_limit_m": edge_piece_limit(rope_radius, fin_half),
@@ -425,6 +440,7 @@ class _Drive:
     dt: float
     n_sub: int
     ratio: int
+    dt_scale: float = 1.0
 
 
 @dataclass
@@ -437,16 +453,30 @@ class _Run:
     ev_rows: list
     snaps: tuple
     fin_piece_max: float = 0.0
-    """rest length [m] of the longest rope piece that pressed on a fin"""
+    """current (stretched) length [m] of the longest rope piece that pressed on a fin (per output
+    interval, the impulse-weighted mean of its chord while it pressed)"""
     fin_imp_long: float = 0.0
     """Σ |impulse| [N s] on the fins from pieces longer than the edge limit"""
     fin_imp_all: float = 0.0
     """Σ |impulse| [N s] on the fins"""
+    steps: int = 0
+    """steps taken"""
+    dt_min: float = math.inf
+    """smallest step [s] (the step is chosen again after each cut, collide.adapt)"""
+    cut_segments: int = 0
+    """segments cut during the run (collide.adapt)"""
+    cut_nodes: int = 0
+    """nodes added by those cuts"""
+    km: M.CollideModel | None = None
+    """the model at the end (cuts append nodes and segments)"""
+    st: M.CollideState | None = None
+    """the state at the end"""
 
 
 def _drive(d: _Drive, n_min: int, n_max: int, snap_at: set, log) -> _Run:
     """Advance the kernel interval by interval from 1 to at most ``n_max`` (end rule: ``simulate``)."""
     st, setup, cfg, km = d.st, d.setup, d.cfg, d.setup.model
+    dt, n_sub, ratio = d.dt, d.n_sub, d.ratio
     limit = edge_piece_limit(km.rope_radius, km.fin_half) or np.inf
     x_full = np.array(d.net.x, dtype=np.float64)
     v_full = np.zeros_like(x_full)  # the held net is at rest (HeldNet)
@@ -455,16 +485,23 @@ def _drive(d: _Drive, n_min: int, n_max: int, snap_at: set, log) -> _Run:
     names = part_names(d.missile)
     with progress_bar(n_max, "collide") as bar:
         for k in range(1, n_max + 1):
-            status = K.advance(km, st, d.n_sub, d.dt, d.ratio)
+            status = K.advance(km, st, n_sub, dt, ratio)
+            run.steps += n_sub
+            run.dt_min = min(run.dt_min, dt)
             t = k * cfg.output_interval
             if status != M.OK:
-                raise NumericalError(_stop_message(status, st, cfg, t, names, setup, d.dt))
-            fin, pt, imp, seg = _take_fin_events(km, st)
+                raise NumericalError(_stop_message(status, st, cfg, t, names, setup, dt))
+            fin, pt, imp, seg, chord = _take_fin_events(km, st)
             if seg.size:
-                run.fin_piece_max = max(run.fin_piece_max, float(km.rest[seg].max()))
+                run.fin_piece_max = max(run.fin_piece_max, float(chord.max()))
                 mag = np.linalg.norm(imp, axis=1)
                 run.fin_imp_all += float(mag.sum())
-                run.fin_imp_long += float(mag[km.rest[seg] > limit].sum())
+                run.fin_imp_long += float(mag[chord > limit].sum())
+                if cfg.fin_piece_chord is not None:
+                    cut = _cut_pressing(d, km, st, seg, chord, run, log, t)
+                    if cut is not None:
+                        km, st, dt, n_sub, ratio = cut
+                        d.rec.km, d.rec.st = km, st
             run.row_start.append(run.row_start[-1] + fin.size)
             if fin.size:
                 run.ev_rows.append((fin, pt, imp))
@@ -474,14 +511,60 @@ def _drive(d: _Drive, n_min: int, n_max: int, snap_at: set, log) -> _Run:
                 d.rec.cols["contacts"][k], d.rec.cols["apex_along_path_m"][k] - d.missile.length,
                 float((st.x[km.free] @ setup.start.direction).max()), cfg.end_clearance)
             if k in snap_at or over or k == n_max:
-                x_full[setup.used], v_full[setup.used] = st.x, st.v
+                x_full[setup.used], v_full[setup.used] = st.x[:setup.used.size], st.v[:setup.used.size]
                 for lst, val in zip(snaps, (t, x_full.copy(), apex.copy(), st.mq.copy(), v_full.copy())):
                     lst.append(val)
             bar.update(1)
             if over:
                 run.stop_reason = "interaction_over"
                 break
+    run.km, run.st = km, st
     return run
+
+
+CUT_NODES_CAP = 200_000
+"""Most nodes ``fin_piece_chord`` may add in one run (a rope cut without end is an error)."""
+
+
+def _cut_pressing(d: _Drive, km: M.CollideModel, st: M.CollideState, seg: np.ndarray, chord: np.ndarray, run: _Run,
+                  log, t: float):
+    """Cut the segments ``seg`` (k,) that pressed on a fin with a chord [m] (k,) longer than
+    ``cfg.fin_piece_chord`` (``collide.adapt``; both ends free) and choose the step again.
+    Returns (model, state, dt, n_sub, ratio) or None when nothing is cut."""
+    cfg, rope = d.cfg, d.net.rope
+    long = chord > cfg.fin_piece_chord
+    if not long.any():
+        return None
+    worst = np.zeros(km.seg.shape[0])
+    np.maximum.at(worst, seg[long], chord[long])
+    idx = np.flatnonzero(worst > 0.0)
+    idx = idx[km.free[km.seg[idx, 0]] & km.free[km.seg[idx, 1]]]
+    if idx.size == 0:
+        return None
+    n_piece = cut_counts(worst[idx], cfg.fin_piece_chord)
+    run.cut_nodes += int((n_piece - 1).sum())
+    if run.cut_nodes > CUT_NODES_CAP:
+        raise NumericalError(f"collide: collide.fin_piece_chord = {cfg.fin_piece_chord:.3g} m has cut more than "
+                             f"{CUT_NODES_CAP} nodes into the rope by t = {t:.4g} s: the rope keeps stretching on the "
+                             f"fins (raise fin_piece_chord)")
+    km, st, d_e = cut_live(km, st, idx, n_piece, rope.density * 0.25 * math.pi * rope.diameter ** 2,
+                           rope.damping_law, rope.damping_ratio)
+    run.cut_segments += int(idx.size)
+    step = d.setup.step
+    k_contact = max(km.k_body, km.k_fin)
+    light = float(km.mass[d.setup.used.size:].min())
+    new = choose_step(cfg, km.k, km.mass[km.seg[:, 0]], km.mass[km.seg[:, 1]], min(light, d.setup.m_reach),
+                      int(np.bincount(km.seg.ravel()).max()), km.rope_radius,
+                      float(km.fin_half.min()), k_contact)
+    n_sub = max(1, math.ceil(cfg.output_interval / (new.dt * d.dt_scale)))
+    dt = cfg.output_interval / n_sub
+    uncut = ~km.always_fast  # the pieces are stepped every step: the window is the uncut rope's
+    ratio = far_ratio(cfg, spring_limit(km.k[uncut], km.mass[km.seg[uncut, 0]], km.mass[km.seg[uncut, 1]]), dt)
+    air_ratio = _air_step_check(km, st, cfg, dt * ratio)
+    km = km._replace(air_every=air_windows(air_ratio) if ratio > 1 else 1)
+    log.debug("collide: t = %.4g s: cut %d pressing rope segments into %d pieces (ΔE %.3g J); dt %.4g s, far net "
+             "every %d steps (was dt %.4g s)", t, idx.size, int(n_piece.sum()), d_e, dt, ratio, step.dt)
+    return km, st, dt, n_sub, ratio
 
 
 def _end_summary(summary: dict, run: _Run, rec: "_Recorder", cfg: CollideConfig, net: HeldNet) -> None:
@@ -497,12 +580,13 @@ def _end_summary(summary: dict, run: _Run, rec: "_Recorder", cfg: CollideConfig,
     limit = summary["edge_piece_limit_m"]
     if limit is not None and run.fin_piece_max > limit:
         summary["warnings"].append(
-            f"collide: rope pieces up to {1e3 * run.fin_piece_max:.3g} mm long pressed on the fins (they delivered "
+            f"collide: rope pieces up to {1e3 * run.fin_piece_max:.3g} mm long (stretched) pressed on the fins (they delivered "
             f"{100 * summary['fin_impulse_share_long_pieces']:.3g} % of the fins' Σ|impulse|), longer than "
             f"(r + h/2)/3 = {1e3 * summary['edge_piece_limit_m']:.3g} mm: measured at 500 m/s, a rope on a fin's "
             f"rounded edge needs pieces that short for its impulse to be within 2 % (at 50 m/s, 12.5 mm pieces were "
             f"within 1.5 %; benchmarks/collide_edge_lab.py): Δv and the fin impulses may not be converged in "
-            f"the rope split (set collide.fin_piece_length to at most the limit, or raise fin_split_margin if it is set)")
+            f"the rope split (cut collide.fin_piece_length by the ratio of the two lengths — the rope's tension stretches "
+            f"its pieces — or raise fin_split_margin if it is set)")
     if run.stop_reason != "interaction_over":
         what = (f"contact force {force_end:.4g} N still acting" if force_end > 0 else
                 f"no contact, but the missile's tail is not {cfg.end_clearance:g} m past the net")

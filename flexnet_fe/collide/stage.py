@@ -78,12 +78,17 @@ def run_collide(net_cfg, deploy_cfg, missile_cfg: MissileConfig, collide_cfg: Co
 def _check_resolution(summary: dict, net, missile: Missile, cfg: CollideConfig, air: Air,
                       log: logging.Logger) -> None:
     """``[collide] resolution_check``: the impact again with the rope pieces at the fins halved
-    (``collide.resolution``); adds ``summary['resolution_check']`` and its warnings."""
+    (``fin_piece_length`` and, when set, ``fin_piece_chord``; ``collide.resolution``); adds
+    ``summary['resolution_check']`` and its warnings."""
     piece = 0.5 * cfg.fin_piece_length
-    log.info("collide: resolution check: the impact again with rope pieces of %.3g mm at the fins", 1e3 * piece)
-    fine = simulate(net, missile, cfg.model_copy(update={"fin_piece_length": piece, "resolution_check": False}),
+    chord = None if cfg.fin_piece_chord is None else 0.5 * cfg.fin_piece_chord
+    log.info("collide: resolution check: the impact again with rope pieces of %.3g mm at the fins%s", 1e3 * piece,
+             "" if chord is None else f", cut to chords of {1e3 * chord:.3g} mm where they press")
+    fine = simulate(net, missile, cfg.model_copy(update={"fin_piece_length": piece, "fin_piece_chord": chord,
+                                                         "resolution_check": False}),
                     air.gravity, log, air_density=air.density, n_snapshots=2).summary
     section, warnings = resolution_moves(summary, fine, piece, cfg.resolution_tolerance)
+    section["fin_piece_chord_m"] = chord
     section["wall_s"] = fine["wall_s"]
     summary["resolution_check"] = section
     summary["warnings"].extend(warnings)

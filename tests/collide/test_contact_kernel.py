@@ -299,3 +299,22 @@ def test_rounded_tip_corner_is_met_later_by_its_offset(radar, scenes):
         assert abs(scenes.total_energy(km, st, mis) - e0) < 5e-3 * e0
     expected = (rho / math.sin(theta / 2) - rho) / v
     assert first[1] - first[0] == pytest.approx(expected, abs=2 * 10 * dt)
+
+
+def test_fin_slot_records_the_pressing_chord_not_the_rest_length(radar, scenes):
+    # Reference: geometry. The edge-resolution guard (simulate.edge_resolution) must judge a rope
+    # piece by the length it has while it presses — the paper's 1 MPa rope stretches its pieces
+    # ~10× at the fins (docs/collide_convergence.md, thirteenth pass) — not by its rest length.
+    # A segment whose two ends are held lies across wing_1's face, 0.1 mm deep, with a rest
+    # length a fifth of its chord: the impulse-weighted chord of its fin slot must be the held
+    # chord L to round-off, whatever the force history.
+    from flexnet_fe.collide.simulate import _take_fin_events
+    L = 0.03
+    a = np.array([-1.8, 0.3, H + R - 1e-4])
+    km, st = scenes.segment_scene(radar, a, a + [0.0, L, 0.0], [0, 0, 0], [0, 0, 0], free=(False, False),
+                                  k=318.0, rest=L / 5, k_contact=1e9)
+    assert K.advance(km, st, 20, 1e-8) == M.OK
+    fin, _, imp, seg, chord = _take_fin_events(km, st)
+    assert list(fin) == [0] and list(seg) == [0] and np.linalg.norm(imp) > 0.0
+    assert chord[0] == pytest.approx(L, rel=1e-12)
+    assert st.fin_len[0] == 0.0 and st.fin_w[0] == 0.0  # the slot is cleared for the next interval

@@ -125,3 +125,20 @@ def test_contact_energy_after_a_call_equals_the_full_scan(radar, log, scenes, ra
         assert st.acc[M.A_U_CONTACT] == full
         in_contact += full > 0.0
     assert in_contact >= 10  # measured: 19 of the 469 calls, at both ratios
+
+
+def test_always_fast_segments_are_stepped_every_step(radar, log, scenes):
+    # Reference: the single-rate loop (ratio 1). With every segment marked always fast
+    # (CollideModel.always_fast: the pieces collide.adapt cuts during a run) a window of 16 steps
+    # has no slow segment, so each node takes every force every step, as at ratio 1: the state
+    # after 3 ms agrees with the single-rate run to round-off (the same forces in another order).
+    km, st, setup = _scene(radar, log, scenes)
+    pinned = km._replace(always_fast=np.ones(km.seg.shape[0], np.bool_))
+    st1, st16 = _copy(st), _copy(st)
+    dt = setup.step.dt
+    for _ in range(int(round(T_END / (255 * dt)))):
+        assert K.advance(km, st1, 255, dt, 1) == M.OK
+        assert K.advance(pinned, st16, 255, dt, 16) == M.OK
+    assert st16.acc[M.A_FAST_SEG_STEPS] == pytest.approx(km.seg.shape[0] * 255 * int(round(T_END / (255 * dt))))
+    assert np.max(np.abs(st16.x - st1.x)) < 1e-9 * np.max(np.abs(st1.x))
+    assert np.max(np.abs(st16.mv - st1.mv)) < 1e-9 * np.max(np.abs(st1.mv))

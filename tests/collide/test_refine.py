@@ -220,28 +220,36 @@ def test_split_contact_scene_closes_energy_and_momentum(radar, log, scenes):
     assert s["fin_impulse_ns"]["wing_1"] > 0.0 and not s["tunnelling"]
     assert s["energy_error_rel"] < 5e-3 and s["momentum_error_rel"] < 1e-8
     assert 0.18 < s["energy_error_rel"] / runs[0].summary["energy_error_rel"] < 0.32
-    # The edge-resolution guard (docs/collide_convergence.md, fourth pass): the rope that pressed on
-    # wing_1 is a 0.1 m bar split in 4, so the longest piece on a fin is 0.1/4 of its rest length;
-    # the limit is (r + h/2)/3 with the radar's thinnest fin (rudders, h/2 = 2 mm) and r = 2.25 mm,
-    # and 25 mm pieces must be warned about.
+    # The edge-resolution guard (docs/collide_convergence.md, fourth and thirteenth passes): the rope
+    # that pressed on wing_1 is a 0.1 m bar split in 4, pieces of 25 mm at rest, which the 1 MPa rope
+    # dragged over the fin stretches further (the guard reads the chord while it presses); the
+    # limit is (r + h/2)/3 with the radar's thinnest fin (rudders, h/2 = 2 mm) and r = 2.25 mm,
+    # and pieces that long must be warned about.
     bar = float(_fin_edge_scene(scenes).rest_length.max())
-    assert s["fin_contact_piece_max_m"] == pytest.approx(bar / 4, rel=1e-12)
+    assert s["fin_contact_piece_max_m"] > bar / 4
     assert s["edge_piece_limit_m"] == pytest.approx((2.25e-3 + 2.0e-3) / 3, rel=1e-12)
     assert any("pressed on the fins" in w for w in s["warnings"])
     assert s["fin_impulse_share_long_pieces"] == 1.0  # every piece on wing_1 is 25 mm long
 
 
 def test_fin_refinement_satisfies_the_edge_guard(radar, log, scenes):
-    # Reference: the edge-resolution rule (docs/collide_convergence.md). The fin-edge scene's two
-    # 0.1 m ropes cross wing_1's strip; cut to fin_piece_length = the limit (r + h/2)/3 there, every
-    # piece that presses on wing_1 is within the limit: no fin impulse from longer pieces, no
-    # warning; momentum closes to round-off and the energy balance within ENERGY_TOLERANCE (0.5 %).
+    # Reference: the edge-resolution rule (docs/collide_convergence.md, fourth and thirteenth
+    # passes), judged on the chord a piece has while it presses. The fin-edge scene's two 0.1 m
+    # ropes of the paper's 1 MPa rope cross wing_1's strip and are dragged over it: pieces cut to
+    # the limit (r + h/2)/3 press at up to 23.6 mm, 17x their length, and the guard must say so;
+    # cut to a sixteenth of it over a 3 cm margin (at 1 cm, rope from beyond the cut reaches the
+    # fin), no piece longer than the limit presses, and there is no warning. Momentum closes to
+    # round-off and the energy balance within ENERGY_TOLERANCE (0.5 %).
     limit = (2.25e-3 + 2.0e-3) / 3
-    cfg = CollideConfig(net_source="flat_taut", duration=4.5e-3, crop=False, fin_piece_length=limit,
-                        fin_split_margin=0.01)
-    s = simulate(_fin_edge_scene(scenes), radar, cfg, 9.81, log).summary
+    coarse = CollideConfig(net_source="flat_taut", duration=4.5e-3, crop=False, fin_piece_length=limit,
+                           fin_split_margin=0.01)
+    s = simulate(_fin_edge_scene(scenes), radar, coarse, 9.81, log).summary
+    assert s["fin_contact_piece_max_m"] > 10 * limit and s["fin_impulse_share_long_pieces"] > 0.5
+    assert any("pressed on the fins" in w for w in s["warnings"])
+    fine = coarse.model_copy(update={"fin_piece_length": limit / 16, "fin_split_margin": 0.03})
+    s = simulate(_fin_edge_scene(scenes), radar, fine, 9.81, log).summary
     assert s["fin_impulse_ns"]["wing_1"] > 0.0 and not s["tunnelling"]
-    assert 0.0 < s["fin_contact_piece_max_m"] <= limit * (1 + 1e-12)
+    assert 0.0 < s["fin_contact_piece_max_m"] <= limit
     assert s["fin_impulse_share_long_pieces"] == 0.0
     assert not any("pressed on the fins" in w for w in s["warnings"])
     assert s["energy_error_rel"] < 5e-3 and s["momentum_error_rel"] < 1e-8

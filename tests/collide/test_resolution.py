@@ -48,20 +48,23 @@ def test_check_needs_a_piece_length_to_halve():
 
 
 def test_stage_reports_the_moves_of_the_two_runs(tmp_path):
-    # Reference: a second model, the same impact run by hand at half the pieces (simulate is
-    # deterministic): the stage's moves are exactly those of the two summaries.
+    # Reference: a second model, the same impact run by hand at half the pieces — both the pieces
+    # cut at the start and the chord they are cut to where they press (simulate is deterministic):
+    # the stage's moves are exactly those of the two summaries.
     net_cfg = TractionNet(edge_length=1.0, mesh_size=0.05, rope_diameter=4.5e-3, corner_mass=1e-3,
                           transverse_modulus=1e11)
     cfg = CollideConfig(net_source="flat_taut", duration=4e-3, aim_point=(0.025, 0.025), snapshots=2,
-                        fin_piece_length=4e-3, resolution_check=True)
+                        fin_piece_length=4e-3, fin_piece_chord=8e-3, resolution_check=True)
     air = isa(8000.0)
     s = run_collide(net_cfg, None, MissileConfig(preset="radar"), cfg, air, None, tmp_path, LOG)
     missile = build_missile(MissileConfig(preset="radar"))
     fine = simulate(held_net(net_cfg, cfg.net_source, None), missile,
-                    cfg.model_copy(update={"fin_piece_length": 2e-3, "resolution_check": False}), air.gravity, LOG,
+                    cfg.model_copy(update={"fin_piece_length": 2e-3, "fin_piece_chord": 4e-3, "resolution_check": False}),
+                    air.gravity, LOG,
                     air_density=air.density, n_snapshots=2).summary
     expected, warnings = resolution_moves(s, fine, 2e-3, cfg.resolution_tolerance)
     got = dict(s["resolution_check"])
-    assert got.pop("wall_s") > 0.0
+    assert got.pop("wall_s") > 0.0 and got.pop("fin_piece_chord_m") == 4e-3
+    assert s["cut_segments"] > 0 and fine["cut_segments"] > 0  # the chord rule was at work in both
     assert got == expected and got["fin_impulse_move_rel"]  # fins were hit and checked
     assert all(w in s["warnings"] for w in warnings)
