@@ -9,8 +9,11 @@ the contact is, at a fraction of that cost.
 
 Rule (between two output intervals, ``simulate._drive``): every segment that pressed on a fin
 during the interval with an impulse-weighted chord c (``CollideState.fin_len``) longer than the
-target chord L is cut into n = ⌈c / L⌉ equal pieces (:func:`cut_live`). A piece that stretches
-further is cut again at a later interval.
+target chord L, and every segment whose chord c is now longer than L among the rope neighbours of
+a pressing segment (sharing a node with it: the rope that slides onto the fin next) and the
+segments within two intervals' travel of a fin (``kernel.fin_gaps``: the rope about to be struck),
+is cut into n = ⌈c / L⌉ equal pieces (:func:`cut_live`). A piece that stretches further is cut
+again at a later interval.
 
 How a live segment i–j is cut into n pieces (the same rope as ``collide.refine.split_at`` makes
 at collision start, applied to the moving state):

@@ -1034,6 +1034,26 @@ def net_energies(model, state):
 
 
 @njit(cache=True)
+def fin_gaps(model, state):
+    """A lower bound [m] (ns,) of each live segment's gap to the nearest fin (``_fin_gap``: its
+    capsule's distance to the fin's core − r − h/2, ≤ 0 when it touches), in the missile's frame;
+    inf for a broken segment or a missile without fins (``collide.adapt``: the pieces about to
+    press)."""
+    n, ns, nf = state.x.shape[0], model.seg.shape[0], model.fin_half.shape[0]
+    wk = _work(model, n)
+    wk.r[:, :] = quat_to_matrix(state.mq)
+    _to_body(model, state, wk, wk.fnode, n)
+    out = np.full(ns, np.inf)
+    for e in range(ns):
+        if not state.alive[e]:
+            continue
+        pa, pb = wk.pbn[model.seg[e, 0]], wk.pbn[model.seg[e, 1]]
+        for fi in range(nf):
+            out[e] = min(out[e], _fin_gap(wk.fin_pl, fi, wk.fin_rh[fi], pa, pb))
+    return out
+
+
+@njit(cache=True)
 def energies(model, state):
     """(net kinetic, rope elastic, contact stored) [J] of any state, every segment near the missile
     tested. After ``advance`` the contact stored energy is also in state.acc[A_U_CONTACT], from the

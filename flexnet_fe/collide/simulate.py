@@ -497,11 +497,11 @@ def _drive(d: _Drive, n_min: int, n_max: int, snap_at: set, log) -> _Run:
                 mag = np.linalg.norm(imp, axis=1)
                 run.fin_imp_all += float(mag.sum())
                 run.fin_imp_long += float(mag[chord > limit].sum())
-                if cfg.fin_piece_chord is not None:
-                    cut = _cut_pressing(d, km, st, seg, chord, run, log, t)
-                    if cut is not None:
-                        km, st, dt, n_sub, ratio = cut
-                        d.rec.km, d.rec.st = km, st
+            if cfg.fin_piece_chord is not None:
+                cut = _cut_pressing(d, km, st, seg, chord, run, log, t)
+                if cut is not None:
+                    km, st, dt, n_sub, ratio = cut
+                    d.rec.km, d.rec.st = km, st
             run.row_start.append(run.row_start[-1] + fin.size)
             if fin.size:
                 run.ev_rows.append((fin, pt, imp))
@@ -522,6 +522,11 @@ def _drive(d: _Drive, n_min: int, n_max: int, snap_at: set, log) -> _Run:
     return run
 
 
+ADAPT_REACH = 2.0
+"""``fin_piece_chord`` also cuts the segments within this many output intervals' travel at the
+impact speed of a fin (a lower bound of their gap, ``kernel.fin_gaps``), so rope is cut before it
+strikes rather than after its first interval of contact."""
+
 CUT_NODES_CAP = 200_000
 """Most nodes ``fin_piece_chord`` may add in one run (a rope cut without end is an error)."""
 
@@ -529,15 +534,19 @@ CUT_NODES_CAP = 200_000
 def _cut_pressing(d: _Drive, km: M.CollideModel, st: M.CollideState, seg: np.ndarray, chord: np.ndarray, run: _Run,
                   log, t: float):
     """Cut the segments ``seg`` (k,) that pressed on a fin with a chord [m] (k,) longer than
-    ``cfg.fin_piece_chord`` (``collide.adapt``; both ends free) and choose the step again.
-    Returns (model, state, dt, n_sub, ratio) or None when nothing is cut."""
+    ``cfg.fin_piece_chord``, and those whose chord is now longer than it among their rope
+    neighbours (sharing a node with them: the rope that slides onto the fin next) and the segments
+    within ADAPT_REACH intervals' travel of a fin (the rope about to be struck; ``collide.adapt``;
+    both ends free); then choose the step again. Returns (model, state, dt, n_sub, ratio) or None
+    when nothing is cut."""
     cfg, rope = d.cfg, d.net.rope
-    long = chord > cfg.fin_piece_chord
-    if not long.any():
-        return None
     worst = np.zeros(km.seg.shape[0])
-    np.maximum.at(worst, seg[long], chord[long])
-    idx = np.flatnonzero(worst > 0.0)
+    np.maximum.at(worst, seg, chord)
+    reach = ADAPT_REACH * cfg.impact_speed * cfg.output_interval
+    near = (np.isin(km.seg, np.unique(km.seg[seg])).any(axis=1) | (K.fin_gaps(km, st) <= reach)) & st.alive
+    now = np.linalg.norm(st.x[km.seg[near, 1]] - st.x[km.seg[near, 0]], axis=1)
+    worst[near] = np.maximum(worst[near], now)
+    idx = np.flatnonzero(worst > cfg.fin_piece_chord)
     idx = idx[km.free[km.seg[idx, 0]] & km.free[km.seg[idx, 1]]]
     if idx.size == 0:
         return None

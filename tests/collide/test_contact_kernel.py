@@ -318,3 +318,16 @@ def test_fin_slot_records_the_pressing_chord_not_the_rest_length(radar, scenes):
     assert list(fin) == [0] and list(seg) == [0] and np.linalg.norm(imp) > 0.0
     assert chord[0] == pytest.approx(L, rel=1e-12)
     assert st.fin_len[0] == 0.0 and st.fin_w[0] == 0.0  # the slot is cleared for the next interval
+
+
+def test_fin_gaps_bound_the_gap_to_the_nearest_fin(radar, scenes):
+    # Reference: geometry. A segment 4 mm clear of wing_1's face, over its interior and parallel
+    # to it: its distance to the core is H + R + 4 mm, so the gap is 4 mm, and the bound
+    # (distance to the mid-plane) is exact there; moved 1 mm into the face the gap is −1 mm.
+    # A broken segment has no gap (inf).
+    for lift in (4e-3, -1e-3):
+        a = np.array([-1.8, 0.3, H + R + lift])
+        km, st = scenes.segment_scene(radar, a, a + [0.0, 0.03, 0.0], [0, 0, 0], [0, 0, 0])
+        assert K.fin_gaps(km, st)[0] == pytest.approx(lift, abs=1e-12)
+    st.alive[0] = False
+    assert K.fin_gaps(km, st)[0] == np.inf
