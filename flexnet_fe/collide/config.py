@@ -87,8 +87,8 @@ class CollideConfig(Section):
     fin_piece_length: Positive | None = Field(None, description=(
         "longest rope piece near the fins [m]: the part of every rope segment whose capsule passes within "
         "fin_split_margin of a fin's strip (the fin's trace swept along the path) is cut into equal pieces no "
-        "longer than this, after rope_split (collide.refine; the edge rule (r + h/2)/3 of "
-        "benchmarks/collide_edge_lab.py is the summary's edge_piece_limit_m); None = no refinement at the fins"))
+        "longer than this, after rope_split (collide.refine; the length at rest: the rope's tension stretches it, "
+        "see fin_piece_chord); None = no refinement at the fins"))
     fin_piece_chord: Positive | None = Field(None, description=(
         "during the run, cut every rope segment that pressed on a fin in an output interval while its "
         "chord (its current, stretched length) was longer than this into equal pieces no longer than it "
@@ -97,7 +97,7 @@ class CollideConfig(Section):
     fin_split_margin: NonNegative = Field(0.05, description=(
         "distance from a fin's strip within which rope is cut to fin_piece_length [m]"))
     resolution_check: bool = Field(False, description=(
-        "also run the impact with fin_piece_length halved and report how far each headline moves "
+        "also run the impact with fin_piece_length (and fin_piece_chord, when set) halved and report how far each headline moves "
         "(summary resolution_check: Δv, CFC peak, impulse, contact duration, per-fin impulse); a "
         "move beyond resolution_tolerance is a warning (collide.resolution). Costs about 2.5x the "
         "collision"))
