@@ -12,8 +12,9 @@ during the interval with an impulse-weighted chord c (``CollideState.fin_len``) 
 target chord L, and every segment whose chord c is now longer than L among the rope neighbours of
 a pressing segment (sharing a node with it: the rope that slides onto the fin next) and the
 segments within two intervals' travel of a fin (``kernel.fin_gaps``: the rope about to be struck),
-is cut into n = ⌈c / L⌉ equal pieces (:func:`cut_live`). A piece that stretches further is cut
-again at a later interval.
+is cut into n = min(⌈c / L⌉, 8) equal pieces (:func:`cut_live`, ``simulate.CUT_MAX``: a long
+segment near a fin is cut progressively, its pieces near the fin again at the next interval). A
+piece that stretches further is cut again at a later interval.
 
 How a live segment i–j is cut into n pieces (the same rope as ``collide.refine.split_at`` makes
 at collision start, applied to the moving state):

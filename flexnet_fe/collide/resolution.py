@@ -31,21 +31,26 @@ def _move(coarse: float, fine: float) -> float:
     return (fine - coarse) / abs(fine)
 
 
-def resolution_moves(coarse: dict, fine: dict, piece: float, tolerance: float) -> tuple[dict, list[str]]:
+def resolution_moves(coarse: dict, fine: dict, piece: float, tolerance: float,
+                     chord: float | None = None) -> tuple[dict, list[str]]:
     """The ``resolution_check`` summary section and its warnings, from the collide summaries of the
     run (``coarse``, pieces of 2 × ``piece`` [m] at the fins) and of the check (``fine``, pieces of
-    ``piece``). Moves are relative to the finer run; ``tolerance`` [-] the largest move not flagged.
+    ``piece``; chord [m]: its ``fin_piece_chord``, when set). Moves are relative to the finer run;
+    ``tolerance`` [-] the largest move not flagged.
     Returns (section, warnings): section = {fin_piece_length_m, tolerance, <headline>_move_rel, …,
     fin_impulse_move_rel: {fin: move}, flagged: [names]}."""
     section: dict = {"fin_piece_length_m": piece, "tolerance": tolerance}
     flagged: list[str] = []
     warnings: list[str] = []
 
+    halved = f"{2e3 * piece:.3g} → {1e3 * piece:.3g} mm" + (
+        "" if chord is None else f", chords {2e3 * chord:.3g} → {1e3 * chord:.3g} mm")
+
     def check(name: str, move: float) -> None:
         if abs(move) > tolerance:
             flagged.append(name)
             warnings.append(f"collide: {name} moves {100 * move:+.1f} % when the rope pieces at the fins are halved "
-                            f"({2e3 * piece:.3g} → {1e3 * piece:.3g} mm; > {100 * tolerance:g} %): not converged in "
+                            f"({halved}; > {100 * tolerance:g} %): not converged in "
                             f"the rope's resolution (collide.fin_piece_length, fin_piece_chord; docs/collide_convergence.md)")
 
     for key, out, name in HEADLINES:

@@ -534,6 +534,12 @@ ADAPT_REACH = 2.0
 impact speed of a fin (a lower bound of their gap, ``kernel.fin_gaps``), so rope is cut before it
 strikes rather than after its first interval of contact."""
 
+CUT_MAX = 8
+"""Most pieces one segment is cut into per output interval (``collide.adapt``): a long segment that
+passes near a fin (rotary nets: up to 2.8 m) is cut progressively — its pieces near the fin again
+at the next interval, the rest not — instead of into thousands of pieces at once. A pressing
+piece of the paper cases (chords ≤ ~11 mm against 1.4 mm) is cut in one go."""
+
 CUT_NODES_CAP = 200_000
 """Most nodes ``fin_piece_chord`` may add in one run (a rope cut without end is an error)."""
 
@@ -557,7 +563,7 @@ def _cut_pressing(d: _Drive, km: M.CollideModel, st: M.CollideState, seg: np.nda
     idx = idx[km.free[km.seg[idx, 0]] & km.free[km.seg[idx, 1]]]
     if idx.size == 0:
         return None
-    n_piece = cut_counts(worst[idx], cfg.fin_piece_chord)
+    n_piece = np.minimum(cut_counts(worst[idx], cfg.fin_piece_chord), CUT_MAX)
     run.cut_nodes += int((n_piece - 1).sum())
     if run.cut_nodes > CUT_NODES_CAP:
         raise NumericalError(f"collide: collide.fin_piece_chord = {cfg.fin_piece_chord:.3g} m has cut more than "

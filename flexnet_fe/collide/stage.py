@@ -87,7 +87,7 @@ def _check_resolution(summary: dict, net, missile: Missile, cfg: CollideConfig, 
     fine = simulate(net, missile, cfg.model_copy(update={"fin_piece_length": piece, "fin_piece_chord": chord,
                                                          "resolution_check": False}),
                     air.gravity, log, air_density=air.density, n_snapshots=2).summary
-    section, warnings = resolution_moves(summary, fine, piece, cfg.resolution_tolerance)
+    section, warnings = resolution_moves(summary, fine, piece, cfg.resolution_tolerance, chord)
     section["fin_piece_chord_m"] = chord
     section["wall_s"] = fine["wall_s"]
     summary["resolution_check"] = section

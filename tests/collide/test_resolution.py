@@ -38,8 +38,9 @@ def test_moves_are_relative_to_the_finer_run_and_flag_beyond_the_tolerance():
     assert section["flagged"] == ["Δv/v", "rudder_2 impulse"] and len(warnings) == 2
     assert "+7.0 %" in warnings[0] and "0.7 → 0.35 mm" in warnings[0]
     # a headline the finer run does not have at all (no contact left): −100 %, finite for strict JSON
-    gone, _ = resolution_moves(coarse, {**fine, "duration_s": 0.0}, 0.35e-3, 0.02)
+    gone, gone_w = resolution_moves(coarse, {**fine, "duration_s": 0.0}, 0.35e-3, 0.02, 0.7e-3)
     assert gone["duration_move_rel"] == -1.0 and "contact duration" in gone["flagged"]
+    assert "0.7 → 0.35 mm, chords 1.4 → 0.7 mm" in gone_w[0]  # the chord of collide.adapt, halved too
 
 
 def test_check_needs_a_piece_length_to_halve():
@@ -62,7 +63,7 @@ def test_stage_reports_the_moves_of_the_two_runs(tmp_path):
                     cfg.model_copy(update={"fin_piece_length": 2e-3, "fin_piece_chord": 4e-3, "resolution_check": False}),
                     air.gravity, LOG,
                     air_density=air.density, n_snapshots=2).summary
-    expected, warnings = resolution_moves(s, fine, 2e-3, cfg.resolution_tolerance)
+    expected, warnings = resolution_moves(s, fine, 2e-3, cfg.resolution_tolerance, 4e-3)
     got = dict(s["resolution_check"])
     assert got.pop("wall_s") > 0.0 and got.pop("fin_piece_chord_m") == 4e-3
     assert s["cut_segments"] > 0 and fine["cut_segments"] > 0  # the chord rule was at work in both
