@@ -37,7 +37,9 @@ The cut changes the model: the step is chosen again (``timestep.choose_step``: t
 shorten the contact limit). The pieces are stiffer than the rest of the rope; they are stepped
 every step (``CollideModel.always_fast``), so the far-net window (``simulate.far_ratio``) stays
 set by the uncut rope's stiffest segment and grows as the step shrinks. Nodes and segments are appended: the ids of the existing ones do not change,
-and segment e keeps being the parent's first piece.
+and segment e keeps being the parent's first piece. The snapshots and the result's ``net`` are the
+net as cut at the start: a segment cut during the run is drawn as its chord (its pieces lie on it
+when cut; later they bend), and its ``alive`` flag is its first piece's.
 """
 from __future__ import annotations
 

@@ -21,9 +21,9 @@ QUICK_DEPLOY = QUICK_NET + ("deploy.duration=0.2", "deploy.snapshot_interval=0.2
 FULL_DEPLOY = ("deploy.snapshot_interval=0.4",)
 """Snapshots (.vtu) are not part of what the study measures: one at the end only."""
 
-NO_FIN_CUT = ("collide.fin_piece_length=1.0",)
-"""The rope not cut at the fins (a 1 m piece is longer than any bar of the reduced nets, so
-``collide.refine`` cuts nothing): the reduced scenes check the machinery, the step and the
+NO_FIN_CUT = ("collide.fin_piece_length=1.0", "collide.fin_piece_chord=1.0")
+"""The rope not cut at the fins, neither at the start nor during the run (a 1 m piece or chord is
+longer than any bar of the reduced nets, so ``collide.refine`` and ``collide.adapt`` cut nothing): the reduced scenes check the machinery, the step and the
 contact law, not the rope's resolution at the fin edges, which the full study and
 docs/collide_convergence.md measure on the shipped case (its 1.4 mm pieces would multiply the
 quick scenes' cost ≈ 10–50×)."""
