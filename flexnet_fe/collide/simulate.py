@@ -262,7 +262,9 @@ def simulate(net: HeldNet, missile: Missile, cfg: CollideConfig, gravity: float,
     """Run the impact of ``missile`` on the held ``net`` per ``cfg`` (gravity g [m/s²] used only
     if ``cfg.gravity``; air_density ρ [kg/m³], the [atmosphere]'s, needed and used only if
     ``cfg.air``). The rope near the path is first split per ``cfg.rope_split``, then cut to
-    ``cfg.fin_piece_length`` near the fins (``collide.refine``; the result's ``net`` is the split net). Keyword overrides (tests,
+    ``cfg.fin_piece_length`` near the fins (``collide.refine``; the result's ``net`` is the split net),
+    and with ``cfg.fin_piece_chord`` the rope is cut again during the run where it presses on a fin
+    or is about to (``collide.adapt``; summary ``cut_segments``, ``cut_nodes``, ``rope_refinement_j``). Keyword overrides (tests,
     convergence studies): crop, n_snapshots, dt_scale (the chosen dt is multiplied by it).
 
     End rule: the run lasts at least ``cfg.duration``; from then on it stops at the first output
