@@ -47,7 +47,7 @@ import numpy as np
 
 from flexnet_fe.collide.crop import free_nodes
 from flexnet_fe.collide.scene import HeldNet, missile_attitude, shape_bbox
-from flexnet_fe.net.topology import segment_damping, segment_stiffness
+from flexnet_fe.net.topology import rope_area, segment_damping, segment_stiffness
 
 
 def near_path_segments(x: np.ndarray, springs: np.ndarray, hub_link: np.ndarray, aim: np.ndarray,
@@ -82,7 +82,7 @@ def split_at(net: HeldNet, idx: np.ndarray, cuts: list[np.ndarray]) -> HeldNet:
     a, b = m.springs[idx, 0], m.springs[idx, 1]
     frac = [np.diff(np.concatenate([[0.0], c, [1.0]])) for c in cuts]  # piece fractions f_j
     f_all = np.concatenate(frac)
-    seg_mass = net.rope.density * 0.25 * np.pi * net.rope.diameter ** 2 * m.rest_length[idx]
+    seg_mass = net.rope.density * rope_area(net.rope.diameter) * m.rest_length[idx]
     mass = np.array(m.mass, dtype=np.float64)
     np.add.at(mass, a, -0.5 * seg_mass * (1.0 - np.array([f[0] for f in frac])))  # end a keeps f_1 / 2
     np.add.at(mass, b, -0.5 * seg_mass * (1.0 - np.array([f[-1] for f in frac])))  # end b keeps f_n / 2

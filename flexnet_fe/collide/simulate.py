@@ -45,6 +45,7 @@ from flexnet_fe.contact.restitution import restitution_check
 from flexnet_fe.errors import FlexnetError, NumericalError
 from flexnet_fe.missile.geometry import Missile
 from flexnet_fe.missile.shapes import nose_cones, pack_shapes, part_names
+from flexnet_fe.net.topology import rope_area
 from flexnet_fe.progress import progress_bar
 from flexnet_fe.frames import quat_mul, quat_to_matrix
 
@@ -308,7 +309,7 @@ def simulate(net: HeldNet, missile: Missile, cfg: CollideConfig, gravity: float,
     steps = run.steps
     summary = rec.summary(setup, loads, x_start, min(dt, run.dt_min), steps, time.perf_counter() - t_wall)
     _end_summary(summary, run, rec, cfg, net)
-    km, st = run.km, run.st
+    km, st = rec.km, rec.st  # the model and state at the end (cuts append nodes and segments)
     summary.update(_air_summary(km, st, cfg, air_ratio))
     summary.update(far_net_ratio=ratio, far_net_dt_s=dt * ratio, near_net_segment_share=(
         1.0 if ratio == 1 else float(st.acc[M.A_FAST_SEG_STEPS]) / max(steps * km.seg.shape[0], 1)))
@@ -346,7 +347,7 @@ def far_ratio(cfg: CollideConfig, dt_spring: float, dt: float) -> int:
     FAR_RATIO_CAP."""
     if cfg.far_net_ratio:
         return int(cfg.far_net_ratio)
-    return int(max(1, min(FAR_RATIO_CAP, math.floor(FAR_PHASE * dt_spring / (2.0 * dt)))))
+    return int(max(1, math.floor(min(FAR_RATIO_CAP, FAR_PHASE * dt_spring / (2.0 * dt)))))  # (dt_spring may be inf)
 
 
 AIR_WINDOWS_CAP = 16
@@ -469,10 +470,6 @@ class _Run:
     """segments cut during the run (collide.adapt)"""
     cut_nodes: int = 0
     """nodes added by those cuts"""
-    km: M.CollideModel | None = None
-    """the model at the end (cuts append nodes and segments)"""
-    st: M.CollideState | None = None
-    """the state at the end"""
 
 
 def _drive(d: _Drive, n_min: int, n_max: int, snap_at: set, log) -> _Run:
@@ -520,7 +517,6 @@ def _drive(d: _Drive, n_min: int, n_max: int, snap_at: set, log) -> _Run:
             if over:
                 run.stop_reason = "interaction_over"
                 break
-    run.km, run.st = km, st
     return run
 
 
@@ -571,7 +567,7 @@ def _cut_pressing(d: _Drive, km: M.CollideModel, st: M.CollideState, seg: np.nda
         raise NumericalError(f"collide: collide.fin_piece_chord = {cfg.fin_piece_chord:.3g} m has cut more than "
                              f"{CUT_NODES_CAP} nodes into the rope by t = {t:.4g} s: the rope keeps stretching on the "
                              f"fins (raise fin_piece_chord)")
-    km, st, d_e = cut_live(km, st, idx, n_piece, rope.density * 0.25 * math.pi * rope.diameter ** 2,
+    km, st, d_e = cut_live(km, st, idx, n_piece, rope.density * rope_area(rope.diameter),
                            rope.damping_law, rope.damping_ratio)
     run.cut_segments += int(idx.size)
     step = d.setup.step

@@ -108,6 +108,8 @@ def test_automatic_ratio_bounds_the_springs_phase():
     assert far_ratio(cfg, dt_spring=1.15e-5 / 4, dt=3.92e-8 / 2) == 9  # pieces / 4: ω × 4, dt / 2
     assert far_ratio(cfg, dt_spring=1e-3, dt=1e-8) == FAR_RATIO_CAP
     assert far_ratio(cfg, dt_spring=1e-8, dt=1e-8) == 1
+    # no uncut segment left to set a limit (every one cut during the run, collide.adapt): the cap
+    assert far_ratio(cfg, dt_spring=float("inf"), dt=1e-8) == FAR_RATIO_CAP
     assert far_ratio(CollideConfig(far_net_ratio=3), dt_spring=1e-3, dt=1e-8) == 3
 
 
