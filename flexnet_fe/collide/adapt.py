@@ -37,11 +37,21 @@ The cut changes the model: the step is chosen again (``timestep.choose_step``: t
 shorten the contact limit). The pieces are stiffer than the rest of the rope; they are stepped
 every step (``CollideModel.always_fast``), so the far-net window (``simulate.far_ratio``) stays
 set by the uncut rope's stiffest segment and grows as the step shrinks. Nodes and segments are appended: the ids of the existing ones do not change,
-and segment e keeps being the parent's first piece. The snapshots and the result's ``net`` are the
+and segment e keeps being the parent's first piece.
+
+Rope that has left the fins is merged back (:func:`merge_roots`, rule in ``simulate._merge_idle``):
+once every piece of a start segment is out of contact, ``simulate.MERGE_REACH`` intervals' travel
+from every fin and the pieces lie on their chord, the segment is restored as it was at the start
+(its rope law; mass and momentum kept, the energy change booked as for a cut). Without it the
+pieces of every strand the fins ever touched stay in the run, stepped every step at the contact
+step: in radar × traction 3 900 of them from 5 ms on, against ~20 segments near the fins
+(docs/performance.md). ``Lineage`` records which start segment each piece belongs to and where. The snapshots and the result's ``net`` are the
 net as cut at the start: a segment cut during the run is drawn as its chord (its pieces lie on it
 when cut; later they bend), and its ``alive`` flag is its first piece's.
 """
 from __future__ import annotations
+
+from typing import NamedTuple
 
 import numpy as np
 
@@ -140,3 +150,111 @@ def cut_live(km: M.CollideModel, st: M.CollideState, idx: np.ndarray, n_piece: n
     state.acc[M.A_REFINE] -= d_e
     return model, state, d_e
 
+
+
+class Lineage(NamedTuple):
+    """Where each segment of the running model comes from (``cut_live``, ``merge_roots``): root (ns,)
+    int64 the segment of the model at collision start it is a piece of (itself if never cut); s0, s1
+    (ns,) the piece's span in the root's rest coordinate (0 at the root's first node, 1 at its
+    second). A root's first piece keeps the root's index."""
+
+    root: np.ndarray
+    s0: np.ndarray
+    s1: np.ndarray
+
+
+def lineage_start(n_seg: int) -> Lineage:
+    """Every segment its own root, spanning [0, 1]."""
+    return Lineage(np.arange(n_seg, dtype=np.int64), np.zeros(n_seg), np.ones(n_seg))
+
+
+def lineage_cut(lin: Lineage, idx: np.ndarray, n_piece: np.ndarray) -> Lineage:
+    """The lineage after ``cut_live(…, idx, n_piece)``: segment idx[s] keeps its first piece, the other
+    n_piece[s] − 1 pieces are appended in order (as ``cut_live`` appends them)."""
+    if idx.size == 0:
+        return lin
+    s0, span = lin.s0[idx], lin.s1[idx] - lin.s0[idx]
+    m = np.concatenate([np.arange(1, n) for n in n_piece]).astype(np.float64)
+    rep = np.repeat(np.arange(idx.size), n_piece - 1)
+    s1 = lin.s1.copy()
+    s1[idx] = s0 + span / n_piece
+    step = span[rep] / n_piece[rep]
+    return Lineage(np.concatenate([lin.root, lin.root[idx][rep]]),
+                   np.concatenate([lin.s0, s0[rep] + m * step]),
+                   np.concatenate([s1, s0[rep] + (m + 1.0) * step]))
+
+
+def merge_roots(km: M.CollideModel, st: M.CollideState, km0: M.CollideModel, lin: Lineage, roots: np.ndarray,
+                damping_law: str, damping_ratio: float) -> tuple[M.CollideModel, M.CollideState, Lineage, np.ndarray,
+                                                                  float]:
+    """(model, state, lineage, new segment index (ns_old,) int64 (−1: removed), ΔE): the pieces of each
+    root segment ``roots`` (indices into km0, the model at collision start) merged back into that
+    segment, the reverse of ``cut_live`` — for rope that has left the fins (``simulate``: the pieces
+    are then idle, stepped every step for nothing).
+
+    The pieces' interior nodes are removed; each one's mass m_k and momentum m_k v_k go to the root's
+    end nodes a and b in the shares (1 − s_k, s_k), s_k its rest coordinate on the root: **mass and
+    momentum are unchanged** to round-off, and a and b get back exactly the root's lumped mass λ l0/2
+    each (the trapezoid rule is exact on the linear weights). The root's rope law is the start
+    model's (rest length, E·A/l0, slack, breaking stretch, air diameter; the dashpot by the rope's
+    damping law with the current end masses, as ``cut_live``). The energy change ΔE (kinetic: the
+    pieces' motion relative to the linear field; elastic: the path of the pieces against the chord)
+    is booked in ``acc[A_REFINE]`` (−ΔE). The pieces must be intact and out of contact (the
+    caller's rule); the start model's nodes keep their indices."""
+    roots = np.unique(roots)
+    if roots.size == 0:
+        return km, st, lin, np.arange(km.seg.shape[0]), 0.0
+    if st.ntouched[0]:
+        raise ValueError("merge_roots: the fin-load slots of the last call have not been taken")
+    e_before = _total_energy(km, st)
+    n_seg, n_nodes, nf = km.seg.shape[0], km.mass.shape[0], km.fin_half.shape[0]
+    chosen = np.zeros(km0.seg.shape[0], dtype=np.bool_)
+    chosen[roots] = True
+    pieces = np.flatnonzero(chosen[lin.root])
+    inner = pieces[lin.s0[pieces] > 0.0]  # pieces that start at an interior node
+    node, s, r = km.seg[inner, 0], lin.s0[inner], lin.root[inner]
+    a, b = km0.seg[r, 0], km0.seg[r, 1]
+    mass = km.mass.copy()
+    mom = km.mass[:, None] * st.v
+    m_k = km.mass[node]
+    np.add.at(mass, a, (1.0 - s) * m_k)
+    np.add.at(mass, b, s * m_k)
+    np.add.at(mom, a, ((1.0 - s) * m_k)[:, None] * st.v[node])
+    np.add.at(mom, b, (s * m_k)[:, None] * st.v[node])
+    ends = np.unique(np.concatenate([a, b]))
+    v = st.v.copy()
+    v[ends] = mom[ends] / mass[ends, None]
+    keep_n = np.ones(n_nodes, dtype=np.bool_)
+    keep_n[node] = False
+    keep_s = np.ones(n_seg, dtype=np.bool_)
+    keep_s[pieces[pieces != lin.root[pieces]]] = False
+    new_node = np.cumsum(keep_n) - 1
+    new_seg = np.where(keep_s, np.cumsum(keep_s) - 1, -1)
+    seg = km.seg.copy()
+    rest, k, c, off = km.rest.copy(), km.k.copy(), km.c.copy(), km.off.copy()
+    brk, diam = km.break_stretch.copy(), km.diameter.copy()
+    seg[roots], rest[roots], k[roots], off[roots] = km0.seg[roots], km0.rest[roots], km0.k[roots], km0.off[roots]
+    brk[roots] = km0.break_stretch[roots]
+    if diam.size:
+        diam[roots] = km0.diameter[roots]
+    c[roots] = km0.c[roots] if damping_law == "material" else segment_damping(
+        k[roots], mass[seg[roots, 0]], mass[seg[roots, 1]], damping_ratio)
+    fast = km.always_fast.copy()
+    fast[roots] = False
+    model = km._replace(
+        seg=np.ascontiguousarray(new_node[seg[keep_s]]), rest=rest[keep_s], k=k[keep_s], c=c[keep_s],
+        off=off[keep_s], break_stretch=brk[keep_s], mass=mass[keep_n], free=km.free[keep_n],
+        diameter=diam[keep_s] if diam.size else diam, always_fast=fast[keep_s])
+    slots = np.repeat(keep_s, nf)
+    vk = st.vk.reshape(n_seg, 1 + nf)[keep_s]
+    vk[new_seg[roots]] = 0.0
+    state = st._replace(
+        x=np.ascontiguousarray(st.x[keep_n]), v=np.ascontiguousarray(v[keep_n]), alive=st.alive[keep_s],
+        vk=np.ascontiguousarray(vk.ravel()), fin_imp=st.fin_imp[slots], fin_pt=st.fin_pt[slots],
+        fin_w=st.fin_w[slots], fin_len=st.fin_len[slots], touched=np.zeros(int(slots.sum()), np.int64))
+    s0, s1 = lin.s0.copy(), lin.s1.copy()
+    s0[roots], s1[roots] = 0.0, 1.0
+    lineage = Lineage(lin.root[keep_s], s0[keep_s], s1[keep_s])
+    d_e = _total_energy(model, state) - e_before
+    state.acc[M.A_REFINE] -= d_e
+    return model, state, lineage, new_seg, d_e

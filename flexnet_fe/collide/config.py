@@ -90,10 +90,11 @@ class CollideConfig(Section):
         "longer than this, after rope_split (collide.refine; the length at rest: the rope's tension stretches it, "
         "see fin_piece_chord); None = no refinement at the fins"))
     fin_piece_chord: Positive | None = Field(None, description=(
-        "during the run, cut every rope segment that pressed on a fin in an output interval while its "
-        "chord (its current, stretched length) was longer than this into equal pieces no longer than it "
-        "[m] (collide.adapt; the stretch of the paper's 1 MPa rope makes a piece cut at the start ~10x "
-        "longer where it presses); None = no cutting during the run"))
+        "during the run, cut rope whose chord (its current, stretched length) is longer than this into equal "
+        "pieces no longer than it [m] where it presses on a fin or is about to (the segments that pressed in an "
+        "output interval, their rope neighbours, those within two intervals' travel of a fin), and merge the "
+        "pieces back once that rope has left the fins (collide.adapt; the stretch of the paper's 1 MPa rope "
+        "makes a piece cut at the start ~10x longer where it presses); None = no cutting during the run"))
     fin_split_margin: NonNegative = Field(0.05, description=(
         "distance from a fin's strip within which rope is cut to fin_piece_length [m]"))
     resolution_check: bool = Field(False, description=(

@@ -35,7 +35,7 @@ from flexnet_fe.collide import model as M
 from flexnet_fe.collide.config import CollideConfig
 from flexnet_fe.collide.crop import (active_segments, boundary_motion, boundary_nodes, crop_reach, free_nodes,
                                      wave_speed)
-from flexnet_fe.collide.adapt import cut_counts, cut_live
+from flexnet_fe.collide.adapt import Lineage, cut_counts, cut_live, lineage_cut, lineage_start, merge_roots
 from flexnet_fe.collide.refine import refine_near_fins, split_near_path
 from flexnet_fe.collide.metrics import FinContacts, MissileHistory, collision_metrics
 from flexnet_fe.collide.scene import HeldNet, MissileStart, fin_planes, place_missile
@@ -314,6 +314,7 @@ def simulate(net: HeldNet, missile: Missile, cfg: CollideConfig, gravity: float,
     summary.update(far_net_ratio=ratio, far_net_dt_s=dt * ratio, near_net_segment_share=(
         1.0 if ratio == 1 else float(st.acc[M.A_FAST_SEG_STEPS]) / max(steps * km.seg.shape[0], 1)))
     summary.update(fin_piece_chord_m=cfg.fin_piece_chord, cut_segments=run.cut_segments, cut_nodes=run.cut_nodes,
+                   merged_segments=run.merged_segments, merged_nodes=run.merged_nodes,
                    rope_refinement_j=float(st.acc[M.A_REFINE]))
     alive = np.ones(net.model.n_springs, dtype=bool)
     alive[setup.seg_idx] = st.alive[:setup.seg_idx.size]  # (a cut segment: its first piece)
@@ -470,6 +471,12 @@ class _Run:
     """segments cut during the run (collide.adapt)"""
     cut_nodes: int = 0
     """nodes added by those cuts"""
+    merged_segments: int = 0
+    """start segments whose pieces were merged back during the run (``_merge_idle``)"""
+    merged_nodes: int = 0
+    """nodes those merges removed"""
+    lineage: Lineage | None = None
+    """where each segment of the running model comes from (``collide.adapt.Lineage``)"""
 
 
 def _drive(d: _Drive, n_min: int, n_max: int, snap_at: set, log) -> _Run:
@@ -480,7 +487,8 @@ def _drive(d: _Drive, n_min: int, n_max: int, snap_at: set, log) -> _Run:
     x_full = np.array(d.net.x, dtype=np.float64)
     v_full = np.zeros_like(x_full)  # the held net is at rest (HeldNet)
     snaps = ([0.0], [x_full.copy()], [setup.start.apex.copy()], [st.mq.copy()], [v_full.copy()])
-    run = _Run(0, "max_duration" if cfg.max_duration is not None else "duration", [0], [], snaps)
+    run = _Run(0, "max_duration" if cfg.max_duration is not None else "duration", [0], [], snaps,
+               lineage=lineage_start(km.seg.shape[0]))
     names = part_names(d.missile)
     with progress_bar(n_max, "collide") as bar:
         for k in range(1, n_max + 1):
@@ -497,9 +505,9 @@ def _drive(d: _Drive, n_min: int, n_max: int, snap_at: set, log) -> _Run:
                 run.fin_imp_all += float(mag.sum())
                 run.fin_imp_long += float(mag[chord > limit].sum())
             if cfg.fin_piece_chord is not None:
-                cut = _cut_pressing(d, km, st, seg, chord, run, log, t)
-                if cut is not None:
-                    km, st, dt, n_sub, ratio = cut
+                adapted = _adapt(d, km, st, seg, chord, run, log, t)
+                if adapted is not None:
+                    km, st, dt, n_sub, ratio = adapted
                     d.rec.km, d.rec.st = km, st
             run.row_start.append(run.row_start[-1] + fin.size)
             if fin.size:
@@ -542,14 +550,43 @@ CUT_NODES_CAP = 200_000
 """Most nodes ``fin_piece_chord`` may add in one run (a rope cut without end is an error)."""
 
 
+MERGE_REACH = 3.0
+"""The pieces of a start segment are merged back (``_merge_idle``) once every one of them is at least
+this many output intervals' travel at the impact speed from every fin (3 cm in the paper cases),
+three times the reach at which rope is cut (ADAPT_REACH): a merged segment is not cut again at the
+next interval."""
+
+MERGE_STRAIGHT = 1.0e-3
+"""… and its pieces lie within this fraction of the straight line: Σ piece chords ≤ (1 + this) ×
+the chord between the start segment's end nodes, so the merge changes the rope's elastic energy by
+at most ~2 × this × its tension × chord (booked in ``rope_refinement_j``)."""
+
+
+def _adapt(d: _Drive, km: M.CollideModel, st: M.CollideState, seg: np.ndarray, chord: np.ndarray, run: _Run, log,
+           t: float):
+    """``fin_piece_chord`` between two output intervals: cut where the rope presses or is about to
+    (``_cut_pressing``), merge back the pieces of rope that has left the fins (``_merge_idle``), and
+    choose the step again when either changed the model. Returns (model, state, dt, n_sub, ratio) or
+    None when nothing changed."""
+    cut = _cut_pressing(d, km, st, seg, chord, run, log, t)
+    if cut is not None:
+        km, st = cut
+    merged = _merge_idle(d, km, st, seg, run, log, t)
+    if merged is not None:
+        km, st = merged
+    if cut is None and merged is None:
+        return None
+    km, dt, n_sub, ratio = _restep(d, km, st)
+    return km, st, dt, n_sub, ratio
+
+
 def _cut_pressing(d: _Drive, km: M.CollideModel, st: M.CollideState, seg: np.ndarray, chord: np.ndarray, run: _Run,
                   log, t: float):
     """Cut the segments ``seg`` (k,) that pressed on a fin with a chord [m] (k,) longer than
     ``cfg.fin_piece_chord``, and those whose chord is now longer than it among their rope
     neighbours (sharing a node with them: the rope that slides onto the fin next) and the segments
     within ADAPT_REACH intervals' travel of a fin (the rope about to be struck; ``collide.adapt``;
-    both ends free); then choose the step again. Returns (model, state, dt, n_sub, ratio) or None
-    when nothing is cut."""
+    both ends free). Returns (model, state) or None when nothing is cut."""
     cfg, rope = d.cfg, d.net.rope
     worst = np.zeros(km.seg.shape[0])
     np.maximum.at(worst, seg, chord)
@@ -569,11 +606,56 @@ def _cut_pressing(d: _Drive, km: M.CollideModel, st: M.CollideState, seg: np.nda
                              f"fins (raise fin_piece_chord)")
     km, st, d_e = cut_live(km, st, idx, n_piece, rope.density * rope_area(rope.diameter),
                            rope.damping_law, rope.damping_ratio)
+    run.lineage = lineage_cut(run.lineage, idx, n_piece)
     run.cut_segments += int(idx.size)
-    step = d.setup.step
+    log.debug("collide: t = %.4g s: cut %d pressing rope segments into %d pieces (ΔE %.3g J)", t, idx.size,
+              int(n_piece.sum()), d_e)
+    return km, st
+
+
+def _merge_idle(d: _Drive, km: M.CollideModel, st: M.CollideState, pressed: np.ndarray, run: _Run, log, t: float):
+    """Merge back (``collide.adapt.merge_roots``) the pieces of every start segment that are all
+    intact, out of contact (no contact slot open), at least MERGE_REACH intervals' travel from every
+    fin, share no node with a segment that pressed in the interval (``pressed``, indices before this
+    interval's cut: a cut only appends), and lie within MERGE_STRAIGHT of the straight line.
+    Returns (model, state) or None when nothing is merged."""
+    lin, km0, cfg = run.lineage, d.setup.model, d.cfg
+    pieces = np.flatnonzero(km.always_fast)
+    if pieces.size == 0:
+        return None
+    nf = km.fin_half.shape[0]
+    root = lin.root[pieces]
+    quiet = (st.alive[pieces] & (st.vk.reshape(-1, 1 + nf)[pieces] == 0.0).all(axis=1)
+             & (K.fin_gaps(km, st)[pieces] > MERGE_REACH * cfg.impact_speed * cfg.output_interval)
+             & ~np.isin(km.seg[pieces], km.seg[pressed]).any(axis=1))
+    busy = np.zeros(km0.seg.shape[0], dtype=np.bool_)
+    busy[root[~quiet]] = True
+    path = np.bincount(root, np.linalg.norm(st.x[km.seg[pieces, 1]] - st.x[km.seg[pieces, 0]], axis=1),
+                       minlength=km0.seg.shape[0])
+    line = np.linalg.norm(st.x[km0.seg[:, 1]] - st.x[km0.seg[:, 0]], axis=1)
+    roots = np.unique(root)
+    roots = roots[~busy[roots] & (path[roots] <= (1.0 + MERGE_STRAIGHT) * line[roots])]
+    if roots.size == 0:
+        return None
+    n_before = km.mass.shape[0]
+    km, st, run.lineage, _, d_e = merge_roots(km, st, km0, lin, roots, d.net.rope.damping_law,
+                                               d.net.rope.damping_ratio)
+    run.merged_segments += int(roots.size)
+    run.merged_nodes += n_before - km.mass.shape[0]
+    log.debug("collide: t = %.4g s: merged the pieces of %d rope segments that left the fins (%d nodes, ΔE %.3g J)",
+              t, roots.size, n_before - km.mass.shape[0], d_e)
+    return km, st
+
+
+def _restep(d: _Drive, km: M.CollideModel, st: M.CollideState) -> tuple[M.CollideModel, float, int, int]:
+    """(model with its air_every, dt [s], steps per output interval, far-net window [steps]) chosen
+    again for a model the rope's cuts or merges changed: the lightest node cut in (or the lightest the
+    missile can reach) sets the contact limit."""
+    cfg = d.cfg
     k_contact = max(km.k_body, km.k_fin)
-    light = float(km.mass[d.setup.used.size:].min())
-    new = choose_step(cfg, km.k, km.mass[km.seg[:, 0]], km.mass[km.seg[:, 1]], min(light, d.setup.m_reach),
+    cut_in = km.mass[d.setup.used.size:]
+    light = min(float(cut_in.min()), d.setup.m_reach) if cut_in.size else d.setup.m_reach
+    new = choose_step(cfg, km.k, km.mass[km.seg[:, 0]], km.mass[km.seg[:, 1]], light,
                       int(np.bincount(km.seg.ravel()).max()), km.rope_radius,
                       float(km.fin_half.min()), k_contact)
     n_sub = max(1, math.ceil(cfg.output_interval / (new.dt * d.dt_scale)))
@@ -582,9 +664,7 @@ def _cut_pressing(d: _Drive, km: M.CollideModel, st: M.CollideState, seg: np.nda
     ratio = far_ratio(cfg, spring_limit(km.k[uncut], km.mass[km.seg[uncut, 0]], km.mass[km.seg[uncut, 1]]), dt)
     air_ratio = _air_step_check(km, st, cfg, dt * ratio)
     km = km._replace(air_every=air_windows(air_ratio) if ratio > 1 else 1)
-    log.debug("collide: t = %.4g s: cut %d pressing rope segments into %d pieces (ΔE %.3g J); dt %.4g s, far net "
-             "every %d steps (was dt %.4g s)", t, idx.size, int(n_piece.sum()), d_e, dt, ratio, step.dt)
-    return km, st, dt, n_sub, ratio
+    return km, dt, n_sub, ratio
 
 
 def _end_summary(summary: dict, run: _Run, rec: "_Recorder", cfg: CollideConfig, net: HeldNet) -> None:
