@@ -568,10 +568,11 @@ def _adapt(d: _Drive, km: M.CollideModel, st: M.CollideState, seg: np.ndarray, c
     (``_cut_pressing``), merge back the pieces of rope that has left the fins (``_merge_idle``), and
     choose the step again when either changed the model. Returns (model, state, dt, n_sub, ratio) or
     None when nothing changed."""
-    cut = _cut_pressing(d, km, st, seg, chord, run, log, t)
+    gaps = K.fin_gaps(km, st)  # (the cut appends: the ids of the segments gapped here do not change)
+    cut = _cut_pressing(d, km, st, seg, chord, gaps, run, log, t)
     if cut is not None:
         km, st = cut
-    merged = _merge_idle(d, km, st, seg, run, log, t)
+    merged = _merge_idle(d, km, st, seg, gaps, run, log, t)
     if merged is not None:
         km, st = merged
     if cut is None and merged is None:
@@ -580,18 +581,19 @@ def _adapt(d: _Drive, km: M.CollideModel, st: M.CollideState, seg: np.ndarray, c
     return km, st, dt, n_sub, ratio
 
 
-def _cut_pressing(d: _Drive, km: M.CollideModel, st: M.CollideState, seg: np.ndarray, chord: np.ndarray, run: _Run,
-                  log, t: float):
+def _cut_pressing(d: _Drive, km: M.CollideModel, st: M.CollideState, seg: np.ndarray, chord: np.ndarray,
+                  gaps: np.ndarray, run: _Run, log, t: float):
     """Cut the segments ``seg`` (k,) that pressed on a fin with a chord [m] (k,) longer than
     ``cfg.fin_piece_chord``, and those whose chord is now longer than it among their rope
     neighbours (sharing a node with them: the rope that slides onto the fin next) and the segments
-    within ADAPT_REACH intervals' travel of a fin (the rope about to be struck; ``collide.adapt``;
-    both ends free). Returns (model, state) or None when nothing is cut."""
+    within ADAPT_REACH intervals' travel of a fin (gaps [m] (ns,), ``kernel.fin_gaps``: the rope about
+    to be struck; ``collide.adapt``; both ends free). Returns (model, state) or None when nothing is
+    cut."""
     cfg, rope = d.cfg, d.net.rope
     worst = np.zeros(km.seg.shape[0])
     np.maximum.at(worst, seg, chord)
     reach = ADAPT_REACH * cfg.impact_speed * cfg.output_interval
-    near = (np.isin(km.seg, np.unique(km.seg[seg])).any(axis=1) | (K.fin_gaps(km, st) <= reach)) & st.alive
+    near = (np.isin(km.seg, np.unique(km.seg[seg])).any(axis=1) | (gaps <= reach)) & st.alive
     now = np.linalg.norm(st.x[km.seg[near, 1]] - st.x[km.seg[near, 0]], axis=1)
     worst[near] = np.maximum(worst[near], now)
     idx = np.flatnonzero(worst > cfg.fin_piece_chord)
@@ -613,20 +615,25 @@ def _cut_pressing(d: _Drive, km: M.CollideModel, st: M.CollideState, seg: np.nda
     return km, st
 
 
-def _merge_idle(d: _Drive, km: M.CollideModel, st: M.CollideState, pressed: np.ndarray, run: _Run, log, t: float):
+def _merge_idle(d: _Drive, km: M.CollideModel, st: M.CollideState, pressed: np.ndarray, gaps: np.ndarray, run: _Run,
+                log, t: float):
     """Merge back (``collide.adapt.merge_roots``) the pieces of every start segment that are all
     intact, out of contact (no contact slot open), at least MERGE_REACH intervals' travel from every
-    fin, share no node with a segment that pressed in the interval (``pressed``, indices before this
-    interval's cut: a cut only appends), and lie within MERGE_STRAIGHT of the straight line.
-    Returns (model, state) or None when nothing is merged."""
+    fin (gaps [m] (ns_before,) before this interval's cut, which only appends: a piece appended now
+    counts as near), share no node with a segment that pressed in the interval (``pressed``, indices
+    before the cut), and lie within MERGE_STRAIGHT of the straight line. Returns (model, state) or
+    None when nothing is merged."""
     lin, km0, cfg = run.lineage, d.setup.model, d.cfg
     pieces = np.flatnonzero(km.always_fast)
     if pieces.size == 0:
         return None
     nf = km.fin_half.shape[0]
     root = lin.root[pieces]
+    gap = np.zeros(pieces.size)
+    old = pieces < gaps.size
+    gap[old] = gaps[pieces[old]]
     quiet = (st.alive[pieces] & (st.vk.reshape(-1, 1 + nf)[pieces] == 0.0).all(axis=1)
-             & (K.fin_gaps(km, st)[pieces] > MERGE_REACH * cfg.impact_speed * cfg.output_interval)
+             & (gap > MERGE_REACH * cfg.impact_speed * cfg.output_interval)
              & ~np.isin(km.seg[pieces], km.seg[pressed]).any(axis=1))
     busy = np.zeros(km0.seg.shape[0], dtype=np.bool_)
     busy[root[~quiet]] = True
