@@ -252,8 +252,8 @@ def _outcome_item(c: dict) -> Item:
 def _flight_items(run: RunData) -> list[Item]:
     """Hit or miss, miss distance against the lethal radius, and the damage the flight used."""
     stage = next((s for s in run.stages if s.name == "flight"), None)
-    if stage is None:
-        return []
+    if stage is None or (stage.requested is False and not stage.complete):
+        return []  # (a stage the case does not run: status.json lists every stage, pending)
     if not stage.complete:
         return [Item("flight outcome", "no result", f"flight stage {stage.state}", True)]
     f = stage.section

@@ -172,3 +172,21 @@ def test_flight_damage_from_the_shell_shows_every_fin_that_lost_area(tmp_path):
     row = flight["fin area lost, used by the flight (from the shell stage)"]
     assert row[0] == "rudder_2 0.428 %, rudder_3 0.461 %"
     assert "failure strain 0.11" in row[1]
+
+
+def test_a_stage_the_case_does_not_run_is_not_a_missing_result(tmp_path):
+    """radar_rotary runs deploy, collide, shell: its status.json lists flight as pending. The
+    verdict shows no flight outcome for it (before: a red "no result"); a requested flight stage
+    that has not run still shows "no result"."""
+    from flexnet_fe.io import atomic_write_json
+    from flexnet_fe.report.rundir import read_run
+    from flexnet_fe.report.verdict import _flight_items
+
+    run = tmp_path / "run"
+    for stages in (["deploy"], ["deploy", "flight"]):
+        atomic_write_json(run / "resolved.json", {"case": {"case": {"name": "n", "stages": stages}}})
+        atomic_write_json(run / "status.json", {"case": "n", "stages": {"deploy": {"state": "done"},
+                                                                        "flight": {"state": "pending"}}})
+        atomic_write_json(run / "summary.json", {"deploy": {}})
+        items = _flight_items(read_run(run))
+        assert [(i.label, i.value) for i in items] == ([] if stages == ["deploy"] else [("flight outcome", "no result")])
