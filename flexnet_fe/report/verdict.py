@@ -298,5 +298,10 @@ def build_verdict(run: RunData) -> Verdict:
         overall, reason = "PASS", "margin of safety ≥ 0 on every solved fin"
     if overall != "INCOMPLETE" and any(f.marginal for f in fins):
         reason += " (some margins lie within the error estimate: see the warnings)"
+    interval = _num(shell.section.get("load_sample_interval_s")) if shell and shell.complete else None
+    if overall != "INCOMPLETE" and interval is not None:
+        # shell.stage.load_sampling_warning: the peaks follow the fin loads' sampling
+        reason += (f", at the fin loads' {interval * 1e6:.3g} µs sampling, in which the peaks are not "
+                   "converged (see the warnings)")
     return Verdict(overall=overall, overall_reason=reason, fins=fins, missile=tuple(_missile_items(run)),
                    flight=tuple(_flight_items(run)), warnings=tuple(warnings))

@@ -190,3 +190,20 @@ def test_a_stage_the_case_does_not_run_is_not_a_missing_result(tmp_path):
         atomic_write_json(run / "summary.json", {"deploy": {}})
         items = _flight_items(read_run(run))
         assert [(i.label, i.value) for i in items] == ([] if stages == ["deploy"] else [("flight outcome", "no result")])
+
+
+def test_the_verdict_names_the_load_sampling_its_peaks_depend_on(tmp_path):
+    """A shell summary with load_sample_interval_s (shell.stage.load_sampling_warning: the peaks are
+    not converged in it) qualifies PASS with that interval; without it (older runs) it does not."""
+    from flexnet_fe.io import atomic_write_json
+    from flexnet_fe.report.rundir import read_run
+    from flexnet_fe.report.verdict import build_verdict
+
+    run = tmp_path / "run"
+    fin = {"peak_von_mises_pa": 1e8, "allowable_pa": 5e8, "peak_error_estimate_rel": 0.01}
+    atomic_write_json(run / "resolved.json", {"case": {"case": {"name": "n", "stages": ["shell"]}}})
+    atomic_write_json(run / "status.json", {"case": "n", "stages": {"shell": {"state": "done"}}})
+    for extra, said in (({"load_sample_interval_s": 1e-5}, True), ({}, False)):
+        atomic_write_json(run / "summary.json", {"shell": {"wing_1": fin, **extra}})
+        v = build_verdict(read_run(run))
+        assert v.overall == "PASS" and ("10 µs sampling" in v.overall_reason) is said
