@@ -149,13 +149,19 @@ loads' time sampling"). Until a finer sampling shows them converge, every run sa
 (``load_sampling_warning``)."""
 
 
+def load_sample_interval(contacts: FinContacts) -> float | None:
+    """The fin loads' sample interval [s] (``collide.output_interval``); None without contact loads.
+    (summary ``load_sample_interval_s``: the report's verdict names it, ``report.verdict``.)"""
+    if contacts.fin.size == 0 or contacts.t.size < 2:
+        return None
+    return float(np.median(np.diff(contacts.t)))
+
+
 def load_sampling_warning(contacts: FinContacts) -> str | None:
     """The warning that the peaks depend on the fin loads' sample interval (None: no contact
     loads, or an interval at or below LOAD_SAMPLING_CONVERGED_S)."""
-    if contacts.fin.size == 0 or contacts.t.size < 2:
-        return None
-    dt = float(np.median(np.diff(contacts.t)))
-    if LOAD_SAMPLING_CONVERGED_S is not None and dt <= LOAD_SAMPLING_CONVERGED_S:
+    dt = load_sample_interval(contacts)
+    if dt is None or (LOAD_SAMPLING_CONVERGED_S is not None and dt <= LOAD_SAMPLING_CONVERGED_S):
         return None
     return (f"shell: the fin loads are the collision's means over {dt * 1e6:.3g} µs (collide.output_interval), "
             f"linear between samples — a low-pass of about {0.5e-3 / dt:.3g} kHz; the peak stresses are NOT "
@@ -644,7 +650,7 @@ def run_shell(shell: ShellConfig, fins: list[FinSpec], contacts_npz: Path,
     if sample is not None:
         warnings.append(sample)
     fs = [summary[s.name] for s in specs]
-    summary.update(load_sample_interval_s=float(np.median(np.diff(contacts.t))) if contacts.t.size > 1 else None,
+    summary.update(load_sample_interval_s=load_sample_interval(contacts),
                    dt_s=min((r["dt_s"] for r in fs), default=0.0),
                    dt_crit_s=min((r["dt_crit_s"] for r in fs), default=0.0),
                    dofs=sum(r["dofs"] for r in fs), steps=sum(r["steps"] for r in fs),
