@@ -121,7 +121,11 @@ class CollideConfig(Section):
     crop_wave_speed_factor: Positive = Field(
         4.0, description="reach = factor × sqrt(E/ρ) × duration (+ margin) around the missile's swept footprint [-]")
     crop_margin: NonNegative = Field(0.2, description="extra reach of the crop [m]")
-    output_interval: Positive = Field(1e-5, description="sampling interval of histories and fin loads [s]")
+    output_interval: Positive = Field(1e-5, description="sampling interval of the histories [s]")
+    load_interval: Positive | None = Field(None, description=(
+        "sampling interval of the fin loads (their mean force over each interval) [s]; it must divide "
+        "output_interval into a whole number of parts; unset: output_interval. The peak fin stresses depend "
+        "on it (docs/validation.md, \"The fin loads' time sampling\")"))
     cfc_class: Positive = Field(180.0, description=(
         "SAE J211-1 channel frequency class of the filtered missile acceleration in the summary [-] "
         "(collide.metrics; default 180, justified in docs/validation.md)"))
@@ -136,12 +140,27 @@ class CollideConfig(Section):
             raise ValueError("contact_stiffness is only used with stiffness_rule = 'given'")
         if self.output_interval > self.duration:
             raise ValueError("output_interval must not exceed duration")
+        if self.load_interval is not None:
+            parts = self.output_interval / self.load_interval
+            if self.load_interval > self.output_interval or abs(parts - round(parts)) > 1e-6 * parts:
+                raise ValueError(f"load_interval ({self.load_interval:g} s) must divide output_interval "
+                                 f"({self.output_interval:g} s) into a whole number of parts")
         if self.resolution_check and self.fin_piece_length is None:
             raise ValueError("resolution_check needs fin_piece_length (the check halves it)")
         if self.max_duration is not None and self.max_duration < self.duration:
             raise ValueError(f"max_duration ({self.max_duration:g} s) must not be less than duration "
                              f"({self.duration:g} s)")
         return self
+
+    @property
+    def loads_per_output(self) -> int:
+        """Fin-load samples per output interval (output_interval / load_interval) [-]."""
+        return 1 if self.load_interval is None else round(self.output_interval / self.load_interval)
+
+    @property
+    def load_dt(self) -> float:
+        """The fin loads' sample interval [s]: load_interval, or output_interval when it is not set."""
+        return self.output_interval / self.loads_per_output
 
     @property
     def end_time(self) -> float:

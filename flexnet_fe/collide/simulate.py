@@ -6,8 +6,10 @@ benchmarks call it directly); ``stage.run_collide`` writes its result into the r
 Sampling: every ``output_interval`` Δ the history gets one row at the interval's end t_k. The
 accelerations in it are means over the interval, (v(t_k) − v(t_k − Δ))/Δ in body axes (the
 signal the CFC filter of the summary works on); velocities, attitudes and energies are the
-values at t_k. The fin loads are mean forces over each interval, attributed to its midpoint (the
-impulse of every contact is kept exactly).
+values at t_k. The fin loads are mean forces over each ``load_interval`` (a whole fraction of the
+output interval; unset: the output interval), attributed to its midpoint (the impulse of every
+contact is kept exactly): the kernel is called once per load interval and the history's per-interval
+sums and maxima are gathered over the calls of an output interval (``_Interval``).
 
 Energy (history columns ending in ``_j``): missile kinetic (translation + rotation), net
 kinetic, rope elastic, contact stored (Σ K δ^(m+1)/(m+1)), dissipated by rope damping, by
@@ -284,15 +286,15 @@ def simulate(net: HeldNet, missile: Missile, cfg: CollideConfig, gravity: float,
     net = refine_near_fins(split_near_path(net, missile, cfg), missile, cfg)
     setup = build(net, missile, cfg, gravity, log, cfg.crop if crop is None else crop, air_density or 0.0)
     km, start, step = setup.model, setup.start, setup.step
-    n_sub = max(1, math.ceil(cfg.output_interval / (step.dt * dt_scale)))
-    dt = cfg.output_interval / n_sub
-    ratio = far_ratio(cfg, step.dt_spring, dt)
+    n_sub, dt = _sub_steps(cfg, step.dt * dt_scale)
+    ratio = min(far_ratio(cfg, step.dt_spring, dt), n_sub)  # (a window ends with each kernel call)
     n_min = max(1, round(cfg.duration / cfg.output_interval))
     n_max = max(n_min, round(cfg.end_time / cfg.output_interval))
     log.info("collide: dt = %.4g s (%s; limits: springs %.3g s, contact %.3g s, travel per step %.3g s; "
              "safety %.2g), expected penetration %.3g m = %.3g rope radii, %d–%d steps", dt, step.governed_by,
              step.dt_spring, step.dt_contact, step.dt_travel, cfg.dt_safety, step.expected_penetration,
-             step.expected_penetration / net.rope.radius, n_sub * n_min, n_sub * n_max)
+             step.expected_penetration / net.rope.radius, n_sub * cfg.loads_per_output * n_min,
+             n_sub * cfg.loads_per_output * n_max)
     st = M.new_state(net.x[setup.used], km.seg.shape[0], km.fin_half.shape[0], start.x_cg, start.v_cg, start.q)
     air_ratio = _air_step_check(km, st, cfg, dt * ratio)
     setup = replace(setup, model=km._replace(air_every=air_windows(air_ratio) if ratio > 1 else 1))
@@ -479,6 +481,27 @@ class _Run:
     """where each segment of the running model comes from (``collide.adapt.Lineage``)"""
 
 
+class _Interval:
+    """The kernel's per-call accumulators (``model.A_IMP_B``, ``A_FCONTACT``: sums; ``A_NCONTACT``,
+    ``A_PEN_INT``: maxima) gathered over the calls of one output interval (one call per fin-load
+    interval), and put back for the history row."""
+
+    SUMS = [M.A_IMP_B, M.A_IMP_B + 1, M.A_IMP_B + 2, M.A_FCONTACT]
+    MAXIMA = [M.A_NCONTACT, M.A_PEN_INT]
+
+    def __init__(self):
+        self.sums = np.zeros(len(self.SUMS))
+        self.maxima = np.zeros(len(self.MAXIMA))
+
+    def add(self, acc: np.ndarray) -> None:
+        self.sums += acc[self.SUMS]
+        np.maximum(self.maxima, acc[self.MAXIMA], out=self.maxima)
+
+    def put(self, acc: np.ndarray) -> None:
+        acc[self.SUMS] = self.sums
+        acc[self.MAXIMA] = self.maxima
+
+
 def _drive(d: _Drive, n_min: int, n_max: int, snap_at: set, log) -> _Run:
     """Advance the kernel interval by interval from 1 to at most ``n_max`` (end rule: ``simulate``)."""
     st, setup, cfg, km = d.st, d.setup, d.cfg, d.setup.model
@@ -492,26 +515,36 @@ def _drive(d: _Drive, n_min: int, n_max: int, snap_at: set, log) -> _Run:
     names = part_names(d.missile)
     with progress_bar(n_max, "collide") as bar:
         for k in range(1, n_max + 1):
-            status = K.advance(km, st, n_sub, dt, ratio)
-            run.steps += n_sub
-            run.dt_min = min(run.dt_min, dt)
             t = k * cfg.output_interval
-            if status != M.OK:
-                raise NumericalError(_stop_message(status, st, cfg, t, names, setup, dt))
-            fin, pt, imp, seg, chord = _take_fin_events(km, st)
-            if seg.size:
-                run.fin_piece_max = max(run.fin_piece_max, float(chord.max()))
-                mag = np.linalg.norm(imp, axis=1)
-                run.fin_imp_all += float(mag.sum())
-                run.fin_imp_long += float(mag[chord > limit].sum())
+            gather = _Interval()
+            pressed, chords = [], []
+            for j in range(cfg.loads_per_output):
+                status = K.advance(km, st, n_sub, dt, ratio)
+                run.steps += n_sub
+                run.dt_min = min(run.dt_min, dt)
+                if status != M.OK:
+                    t_call = (k - 1) * cfg.output_interval + (j + 1) * cfg.load_dt
+                    raise NumericalError(_stop_message(status, st, cfg, t_call, names, setup, dt))
+                gather.add(st.acc)
+                fin, pt, imp, seg, chord = _take_fin_events(km, st)
+                if seg.size:
+                    run.fin_piece_max = max(run.fin_piece_max, float(chord.max()))
+                    mag = np.linalg.norm(imp, axis=1)
+                    run.fin_imp_all += float(mag.sum())
+                    run.fin_imp_long += float(mag[chord > limit].sum())
+                    pressed.append(seg)
+                    chords.append(chord)
+                run.row_start.append(run.row_start[-1] + fin.size)
+                if fin.size:
+                    run.ev_rows.append((fin, pt, imp))
+            gather.put(st.acc)
             if cfg.fin_piece_chord is not None:
+                seg = np.concatenate(pressed) if pressed else np.zeros(0, np.int64)
+                chord = np.concatenate(chords) if chords else np.zeros(0)
                 adapted = _adapt(d, km, st, seg, chord, run, log, t)
                 if adapted is not None:
                     km, st, dt, n_sub, ratio = adapted
                     d.rec.km, d.rec.st = km, st
-            run.row_start.append(run.row_start[-1] + fin.size)
-            if fin.size:
-                run.ev_rows.append((fin, pt, imp))
             apex = d.rec.sample(k, t, log)
             run.n_done = k
             over = k >= n_min and interaction_over(
@@ -654,8 +687,15 @@ def _merge_idle(d: _Drive, km: M.CollideModel, st: M.CollideState, pressed: np.n
     return km, st
 
 
+def _sub_steps(cfg: CollideConfig, dt_max: float) -> tuple[int, float]:
+    """(steps per fin-load interval, dt [s]): the fewest steps of at most ``dt_max`` [s] that fill
+    one load interval (``cfg.load_dt``) exactly, so load and output times fall on steps."""
+    n_sub = max(1, math.ceil(cfg.load_dt / dt_max))
+    return n_sub, cfg.load_dt / n_sub
+
+
 def _restep(d: _Drive, km: M.CollideModel, st: M.CollideState) -> tuple[M.CollideModel, float, int, int]:
-    """(model with its air_every, dt [s], steps per output interval, far-net window [steps]) chosen
+    """(model with its air_every, dt [s], steps per fin-load interval, far-net window [steps]) chosen
     again for a model the rope's cuts or merges changed: the lightest node cut in (or the lightest the
     missile can reach) sets the contact limit."""
     cfg = d.cfg
@@ -665,10 +705,10 @@ def _restep(d: _Drive, km: M.CollideModel, st: M.CollideState) -> tuple[M.Collid
     new = choose_step(cfg, km.k, km.mass[km.seg[:, 0]], km.mass[km.seg[:, 1]], light,
                       int(np.bincount(km.seg.ravel()).max()), km.rope_radius,
                       float(km.fin_half.min()), k_contact)
-    n_sub = max(1, math.ceil(cfg.output_interval / (new.dt * d.dt_scale)))
-    dt = cfg.output_interval / n_sub
+    n_sub, dt = _sub_steps(cfg, new.dt * d.dt_scale)
     uncut = ~km.always_fast  # the pieces are stepped every step: the window is the uncut rope's
-    ratio = far_ratio(cfg, spring_limit(km.k[uncut], km.mass[km.seg[uncut, 0]], km.mass[km.seg[uncut, 1]]), dt)
+    ratio = min(far_ratio(cfg, spring_limit(km.k[uncut], km.mass[km.seg[uncut, 0]], km.mass[km.seg[uncut, 1]]), dt),
+                n_sub)
     air_ratio = _air_step_check(km, st, cfg, dt * ratio)
     km = km._replace(air_every=air_windows(air_ratio) if ratio > 1 else 1)
     return km, dt, n_sub, ratio
@@ -815,7 +855,7 @@ def _summary(rec: _Recorder, setup: Setup, loads: FinLoads, x_start, dt, steps, 
         MissileHistory(t_s=c["t_s"], vel_world_mps=np.column_stack([c[f"vel_{a}_mps"] for a in "xyz"]),
                        accel_body_mps2=np.column_stack([c[f"accel_body_{a}_mps2"] for a in "xyz"]),
                        contact_force_n=c["contact_force_mean_n"], gravity_mps2=km.gravity, mass_kg=missile.mass),
-        FinContacts(list(loads.fin_names), loads.fin, loads.force, cfg.output_interval), cfc=cfg.cfc_class)
+        FinContacts(list(loads.fin_names), loads.fin, loads.force, cfg.load_dt), cfc=cfg.cfc_class)
     warnings += metrics.pop("warnings")
     e_ach, bad_e = restitution_check(DampingModel(cfg.damping_model).value, cfg.restitution, cfg.impact_speed,
                                      cfg.damping_min_approach_speed, cfg.contact_exponent)
@@ -882,10 +922,10 @@ def _fin_loads(missile, cfg, n_out, row_start, ev_rows, width) -> FinLoads:
     if ev_rows:
         fin = np.concatenate([r[0] for r in ev_rows]).astype(np.int32)
         point = np.concatenate([r[1] for r in ev_rows])
-        force = np.concatenate([r[2] for r in ev_rows]) / cfg.output_interval
+        force = np.concatenate([r[2] for r in ev_rows]) / cfg.load_dt
     else:
         fin, point, force = np.zeros(0, np.int32), np.zeros((0, 3)), np.zeros((0, 3))
-    t_mid = (np.arange(n_out) + 0.5) * cfg.output_interval
+    t_mid = (np.arange(n_out * cfg.loads_per_output) + 0.5) * cfg.load_dt
     return FinLoads(fin_names=np.array([f.name for f in missile.fins]), t=t_mid,
                     row_start=np.asarray(row_start, dtype=np.int64), fin=fin, point=point, force=force,
                     width=np.full(fin.shape[0], width))

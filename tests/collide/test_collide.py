@@ -89,6 +89,48 @@ def test_fin_loads_carry_the_missile_impulse(radar, log, scenes):
     assert np.all(np.abs(w) <= 0.5 * fin.thickness + 1e-9)
 
 
+def test_fin_loads_sampled_finer_than_the_history(radar, log, scenes):
+    # Reference: the same run. With collide.load_interval = output_interval / n and the same step
+    # (n divides the steps per output interval, far net every step), the kernel takes the same
+    # steps in n calls per output interval: the history is the same to round-off, and the n load
+    # samples of each output interval add up to its one sample (impulse kept exactly). The finer
+    # samples resolve more: their largest mean force is at least the coarse one's.
+    base = CollideConfig(net_source="flat_taut", duration=4.5e-3, crop=False, far_net_ratio=1)
+    scene = _fin_edge_scene(scenes)
+    coarse = simulate(scene, radar, base, 9.81, log)
+    n_sub = round(base.output_interval / coarse.summary["dt_s"])
+    n = next(k for k in (4, 3, 5, 2) if n_sub % k == 0)
+    fine = simulate(scene, radar, base.model_copy(update={"load_interval": base.output_interval / n}), 9.81, log)
+    assert fine.summary["dt_s"] == pytest.approx(coarse.summary["dt_s"], rel=1e-12)
+    for col in ("accel_mag_mps2", "contact_force_mean_n", "contacts", "max_penetration_m", "energy_balance_j"):
+        np.testing.assert_allclose(fine.history[col], coarse.history[col], rtol=1e-9,
+                                   atol=1e-9 * np.abs(coarse.history[col]).max(), err_msg=col)
+    fl, cl = fine.loads, coarse.loads
+    assert fl.t.size == n * cl.t.size and fl.row_start.size == fl.t.size + 1
+    np.testing.assert_allclose(fl.t[:n].mean(), cl.t[0], rtol=1e-12)
+
+    def per_sample(ld, dt):  # impulse [N s] (nt, 3) of each sample, all fins
+        rows = np.repeat(np.arange(ld.t.size), np.diff(ld.row_start))
+        out = np.zeros((ld.t.size, 3))
+        np.add.at(out, rows, ld.force * dt)
+        return out
+    j_fine = per_sample(fl, base.output_interval / n).reshape(cl.t.size, n, 3).sum(axis=1)
+    j_coarse = per_sample(cl, base.output_interval)
+    assert np.abs(j_coarse).max() > 0.0
+    np.testing.assert_allclose(j_fine, j_coarse, rtol=1e-9, atol=1e-9 * np.abs(j_coarse).max())
+    assert np.abs(fl.force).max() >= np.abs(cl.force).max()
+    assert fine.summary["fin_impulse_ns"]["wing_1"] == pytest.approx(coarse.summary["fin_impulse_ns"]["wing_1"],
+                                                                      rel=1e-9)
+
+
+def test_load_interval_must_divide_the_output_interval():
+    # Reference: the definition (one kernel call per load interval, n per output interval).
+    with pytest.raises(ValueError, match="load_interval.*whole number"):
+        CollideConfig(output_interval=1e-5, load_interval=3e-6)
+    assert CollideConfig(output_interval=1e-5, load_interval=2.5e-6).loads_per_output == 4
+    assert CollideConfig(output_interval=1e-5).load_dt == 1e-5
+
+
 def test_crop_matches_full_net(radar, log, scenes):
     # Reference: a second model (the full net). Within the simulated time the disturbance cannot
     # reach the held nodes, so the peak acceleration must agree within 1 % (issue 4).
