@@ -34,6 +34,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
+from flexnet_fe.shell.hotspot import mark
 from flexnet_fe.shell.recovery import sample_nodes
 
 NB = 5  # DOFs per node
@@ -315,11 +316,18 @@ class StepData(NamedTuple):
     times: np.ndarray
     """contact sample times (nt,) [s]"""
     colptr: np.ndarray
-    """CSC column pointer of the nodal contact loads, (nt + 1,)"""
+    """CSC column pointer of the contact loads' coefficients over the samples, (nt + 1,): the
+    nodal loads at sample k are Σ_p vals[p] × (basis column rows[p]) over p in colptr[k]:colptr[k+1]"""
     rows: np.ndarray
-    """CSC row (DOF) indices, (nnz,)"""
+    """CSC row indices (basis columns), (nnz,)"""
     vals: np.ndarray
-    """CSC values [N], (nnz,)"""
+    """CSC values [-], (nnz,)"""
+    gptr: np.ndarray
+    """CSC column pointer of the load basis, (nb + 1,)"""
+    grows: np.ndarray
+    """basis row (DOF) indices, (gnnz,)"""
+    gvals: np.ndarray
+    """basis values [N | N m], (gnnz,)"""
     acc_times: np.ndarray
     """body acceleration sample times (na,) [s]"""
     acc: np.ndarray
@@ -328,11 +336,8 @@ class StepData(NamedTuple):
     """1.0 at nodes held at w = 0, (n_nodes,)"""
     normal: np.ndarray
     """fin normal (3,)"""
-    xptr: np.ndarray
-    """St-Venant exclusion (:mod:`flexnet_fe.shell.hotspot`): CSR offsets over the contact
-    samples, (nt + 1,) int64"""
-    xnodes: np.ndarray
-    """nodes inside the zones of each sample's loads (nnz,) int64"""
+    zones: object
+    """the St-Venant zones of each contact sample's loads (:class:`flexnet_fe.shell.hotspot.Exclusion`)"""
 
 
 class StepParams(NamedTuple):
@@ -443,7 +448,10 @@ def _scatter_loads(D, t, k, fext, sign):
     for col, w in ((k, 1.0 - s), (k + 1, s)):
         if w != 0.0 and col < len(D.times):
             for p in range(D.colptr[col], D.colptr[col + 1]):
-                fext[D.rows[p]] += sign * w * D.vals[p]
+                a = sign * w * D.vals[p]
+                b = D.rows[p]
+                for q in range(D.gptr[b], D.gptr[b + 1]):
+                    fext[D.grows[q]] += a * D.gvals[q]
     return k
 
 
@@ -598,7 +606,9 @@ def advance_steps(D, P, R, St, H, n_steps):
             for col in (kL, kL + 1):
                 if col < len(D.times):
                     for p in range(D.colptr[col], D.colptr[col + 1]):
-                        fe[D.rows[p]] = 0.0
+                        b = D.rows[p]
+                        for q in range(D.gptr[b], D.gptr[b + 1]):
+                            fe[D.grows[q]] = 0.0
         sc[S_WORK_INT] += work
         sc[S_STEP] = step
         if sample:
@@ -640,10 +650,7 @@ def _mark_zones(D, t, mask, value):
     k, _ = _bracket(D.times, t, 0)
     if k < 0:
         return
-    for col in (k, k + 1):
-        if col < len(D.xptr) - 1:
-            for p in range(D.xptr[col], D.xptr[col + 1]):
-                mask[D.xnodes[p]] = value
+    mark(D.zones, k, k + 2, mask, value)
 
 
 @njit(cache=True)

@@ -20,7 +20,7 @@ from mpi4py import MPI
 from flexnet_fe.shell import kernel as kn
 from flexnet_fe.shell.explicit import (Backend, LoadHistory, central_difference, constrain)
 from flexnet_fe.shell.forms import NDOF_NODE
-from flexnet_fe.shell.hotspot import Exclusion, no_exclusion
+from flexnet_fe.shell.hotspot import Exclusion, no_exclusion, zone_mask
 from flexnet_fe.shell.model import ShellModel
 from flexnet_fe.shell.recovery import (RecoveryData, accumulate_cells, build_recovery,
                                        nodal_from_numerators)
@@ -144,19 +144,24 @@ def step_data(model: ShellModel, loads: LoadHistory, frame: LocalFrame,
     op = model.op
     n = op.n_owned
     Tn = sparse.kron(sparse.identity(n // NDOF_NODE, format="csr"), sparse.csr_matrix(frame.T))
-    P = (Tn @ loads.nodal).tocsc()
-    P.eliminate_zeros()
-    P.sort_indices()
+    if loads.basis is None:  # one basis column per sample, coefficient 1
+        G, P = (Tn @ loads.nodal).tocsc(), sparse.identity(len(loads.times), format="csc")
+    else:
+        G, P = (Tn @ loads.basis).tocsc(), loads.nodal.tocsc()
+    for A in (G, P):
+        A.eliminate_zeros()
+        A.sort_indices()
     acc = np.ascontiguousarray(loads.accel, dtype=float).reshape(-1, 3) @ frame.T[:3, :3].T
     ex = exclusion or no_exclusion(len(loads.times))
     return kn.StepData(K=kn.split_upper(op.Kb, frame.T), minv=op.minv, mass=op.mass,
                        mass_t=loads.mass_c.sum(axis=0),
                        times=np.asarray(loads.times, float), colptr=P.indptr.astype(np.int64),
                        rows=P.indices.astype(np.int64), vals=P.data.astype(float),
+                       gptr=G.indptr.astype(np.int64), grows=G.indices.astype(np.int64),
+                       gvals=G.data.astype(float),
                        acc_times=np.asarray(loads.accel_times, float),
                        acc=np.ascontiguousarray(acc), wfix=op.wfix,
-                       normal=np.array([0.0, 0.0, 1.0]), xptr=ex.ptr.astype(np.int64),
-                       xnodes=ex.nodes.astype(np.int64))
+                       normal=np.array([0.0, 0.0, 1.0]), zones=ex)
 
 
 def _run_compiled(model, loads, R, *, dt, n_steps, sample_every, frame_every, alpha, beta,
@@ -248,7 +253,7 @@ def _masked_max(nodal: np.ndarray, exclusion: Exclusion, times: np.ndarray, t: f
     n = len(times)
     if n and times[0] <= t <= times[-1]:
         k = min(int(np.searchsorted(times, t, side="right")) - 1, max(n - 2, 0))
-        keep[exclusion.nodes[exclusion.ptr[k]:exclusion.ptr[min(k + 2, n)]]] = False
+        keep[zone_mask(exclusion, k, k + 2)] = False
     vm = np.where(keep, nodal[:, :2].max(axis=1, initial=0.0), 0.0)
     p1 = np.where(keep, nodal[:, 2:].max(axis=1, initial=-np.inf), -np.inf)
     if not len(vm) or vm.max() <= 0.0:

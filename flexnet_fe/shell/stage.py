@@ -24,7 +24,7 @@ from dolfinx.io import XDMFFile
 from mpi4py import MPI
 from scipy import sparse
 
-from flexnet_fe.shell.transfer import FinGeometry, contact_transfer
+from flexnet_fe.shell.transfer import FinGeometry, basis_transfer
 from flexnet_fe.errors import CaseError, NumericalError
 from flexnet_fe.io import read_history_csv, write_history_csv
 from flexnet_fe.progress import progress_bar
@@ -116,7 +116,7 @@ class FinZones:
         self.forces = contacts.force[sel]
         self.widths = contacts.width[sel]
         self.radius = hotspot.exclusion_radius(model.material.thickness, self.widths, factor)
-        self.exclusion = hotspot.exclusion_nodes(model.op.x_nodes, self.sample, self.points,
+        self.exclusion = hotspot.exclusion_zones(model.op.x_nodes, self.sample, self.points,
                                                  self.radius, len(contacts.t))
 
     def active(self, t: float):
@@ -171,24 +171,25 @@ def load_sampling_warning(contacts: FinContacts) -> str | None:
 
 def fin_load_history(model: ShellModel, contacts: FinContacts, fin_index: int,
                      accel_t: np.ndarray, accel: np.ndarray) -> LoadHistory:
-    """Nodal load history of one fin: transfer matrix G (once) then P = G F, one sparse product
-    for all samples (F: event forces arranged by sample, shape (3·ne, nt))."""
+    """Load history of one fin, factored (``LoadHistory.basis``): the events' forces F (3·ne, nt)
+    spread on a grid of load points, C = W F (one sparse product for all samples), and the
+    transfer G_b of those points (:func:`flexnet_fe.shell.transfer.basis_transfer`)."""
     sel = np.flatnonzero(contacts.fin == fin_index)
     nt = len(contacts.t)
     pl = model.fin.plane
     fg = FinGeometry(mesh=model.V.mesh, V=model.V, origin=pl.origin, e1=pl.e1, e2=pl.e2, n=pl.n)
     if len(sel):
-        G = contact_transfer(fg, contacts.point[sel], contacts.width[sel],
-                             plane_tol=2.0 * model.material.thickness)
+        Gb, W = basis_transfer(fg, contacts.point[sel], contacts.width[sel],
+                               plane_tol=2.0 * model.material.thickness)
         rows = np.arange(3 * len(sel))
         cols = np.repeat(contacts.sample[sel], 3)
         F = sparse.csr_matrix((contacts.force[sel].ravel(), (rows, cols)), shape=(3 * len(sel), nt))
-        P = (G @ F).tocsc()
+        C, basis = (W @ F).tocsc(), Gb.tocsc()
     else:
-        P = sparse.csc_matrix((model.op.n_owned, nt))
-    P.sort_indices()
-    return LoadHistory(times=contacts.t, nodal=P, accel_times=accel_t, accel=accel,
-                       mass_c=translational_mass(model.op))
+        C, basis = sparse.csc_matrix((0, nt)), sparse.csc_matrix((model.op.n_owned, 0))
+    C.sort_indices()
+    return LoadHistory(times=contacts.t, nodal=C, accel_times=accel_t, accel=accel,
+                       mass_c=translational_mass(model.op), basis=basis)
 
 
 NODAL_NAMES = ("von_mises_top_nodal_pa", "von_mises_bottom_nodal_pa")

@@ -39,9 +39,8 @@ def test_structural_peak_outside_the_zone_matches_flamant():
     x = m.op.x_nodes
     vm = von_mises(stress_tensors(nodal_strains(R, u), R, 0.5 * MAT.thickness))[: len(x)]
     r_ex = float(hotspot.exclusion_radius(MAT.thickness, np.array([d]), 2.0)[0])
-    ex = hotspot.exclusion_nodes(x, np.array([0]), p, np.array([r_ex]), 1)
-    keep = np.ones(len(x), bool)
-    keep[ex.nodes] = False
+    ex = hotspot.exclusion_zones(x, np.array([0]), p, np.array([r_ex]), 1)
+    keep = ~hotspot.zone_mask(ex, 0, 1)
     assert not keep[np.linalg.norm(x - p[0], axis=1) <= r_ex].any()
     k = int(np.argmax(np.where(keep, vm, 0.0)))
     rel = x[k] - p[0]
@@ -50,6 +49,29 @@ def test_structural_peak_outside_the_zone_matches_flamant():
     flamant = 2.0 * F / (math.pi * MAT.thickness * r)
     assert vm[k] == pytest.approx(flamant, rel=0.05)
     assert vm.max() > 2.5 * vm[k]
+
+
+def test_zones_hold_exactly_the_nodes_within_their_radius():
+    # Reference: brute force, |x − c| ≤ r over every node and every event of the samples asked
+    # for. The bucketed zones must agree node for node, for centres inside, at the edge of and
+    # outside the nodes' box (a contact on the fin's edge face), in any plane orientation.
+    rng = np.random.default_rng(7)
+    e1, e2 = np.array([1.0, 0.0, 0.0]), np.array([0.0, 0.6, 0.8])
+    uv = rng.uniform(0.0, 0.2, size=(3000, 2))
+    x = 0.1 + uv[:, :1] * e1 + uv[:, 1:] * e2
+    ne, nt = 60, 12
+    sample = np.sort(rng.integers(0, nt, ne))
+    pts = 0.1 + rng.uniform(-0.03, 0.23, size=(ne, 1)) * e1 + rng.uniform(-0.03, 0.23, size=(ne, 1)) * e2
+    pts += rng.normal(0.0, 2e-3, size=(ne, 3))
+    r = rng.uniform(5e-3, 1.2e-2, ne)
+    Z = hotspot.exclusion_zones(x, sample, pts, r, nt)
+    for k0, k1 in ((0, 2), (3, 5), (10, 12), (0, nt)):
+        sel = (sample >= k0) & (sample < k1)
+        d = np.linalg.norm(x[:, None, :] - pts[None, sel, :], axis=2)
+        brute = (d <= r[None, sel]).any(axis=1)
+        assert brute.any()
+        np.testing.assert_array_equal(hotspot.zone_mask(Z, k0, k1), brute)
+    assert not hotspot.zone_mask(hotspot.no_exclusion(nt), 0, nt).any()
 
 
 def test_bearing_formulas():
