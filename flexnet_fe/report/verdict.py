@@ -300,8 +300,13 @@ def build_verdict(run: RunData) -> Verdict:
         reason += " (some margins lie within the error estimate: see the warnings)"
     interval = _num(shell.section.get("load_sample_interval_s")) if shell and shell.complete else None
     if overall != "INCOMPLETE" and interval is not None:
-        # shell.stage.load_sampling_warning: the peaks follow the fin loads' sampling
-        reason += (f", at the fin loads' {interval * 1e6:.3g} µs sampling, in which the peaks are not "
-                   "converged (see the warnings)")
+        # shell.stage.load_sampling_warning: coarse, the peaks are under-estimated; fine, they
+        # still follow the rope's discretisation
+        if shell.section.get("load_sampling_resolved"):
+            reason += (f", at the fin loads' {interval * 1e6:.3g} µs sampling; the peaks are not converged in "
+                       "the rope's discretisation (see the warnings)")
+        else:
+            reason += (f", at the fin loads' {interval * 1e6:.3g} µs sampling, which under-estimates the peaks "
+                       "(see the warnings)")
     return Verdict(overall=overall, overall_reason=reason, fins=fins, missile=tuple(_missile_items(run)),
                    flight=tuple(_flight_items(run)), warnings=tuple(warnings))

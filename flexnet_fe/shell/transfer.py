@@ -176,22 +176,33 @@ def _boundary_segments(fg: FinGeometry) -> np.ndarray:
 
 def _nearest_on_boundary(segs: np.ndarray, y2: np.ndarray):
     """For each 2-D point of y2 (m, 2): the nearest point on the fin boundary (m, 2), its
-    distance (m,) [m] and the unit direction of that boundary segment (m, 2)."""
-    a, b = segs[:, 0], segs[:, 1]
-    d = b - a
-    L2 = np.maximum((d * d).sum(1), 1e-300)
+    distance (m,) [m] and the unit direction of that boundary segment (m, 2) (the first nearest
+    segment on a tie). Compiled: the edge contacts of finely sampled fin loads are ~1e5 points
+    against ~1e3 boundary segments (numpy broadcasting took 90 s per fin at 0.156 µs)."""
+    y2 = np.ascontiguousarray(y2, dtype=np.float64).reshape(-1, 2)
     near, dist, tdir = np.zeros((len(y2), 2)), np.zeros(len(y2)), np.zeros((len(y2), 2))
-    for i in range(0, len(y2), 2048):
-        y = y2[i:i + 2048, None, :]
-        s = np.clip(((y - a) * d).sum(2) / L2, 0.0, 1.0)
-        q = a + s[..., None] * d
-        d2 = ((q - y) ** 2).sum(2)
-        k = d2.argmin(1)
-        rows = np.arange(len(k))
-        near[i:i + 2048] = q[rows, k]
-        dist[i:i + 2048] = np.sqrt(d2[rows, k])
-        tdir[i:i + 2048] = d[k] / np.sqrt(L2[k])[:, None]
+    _nearest_kernel(np.ascontiguousarray(segs, dtype=np.float64), y2, near, dist, tdir)
     return near, dist, tdir
+
+
+@njit(cache=True)
+def _nearest_kernel(segs, y2, near, dist, tdir):
+    for i in range(y2.shape[0]):
+        best, bq0, bq1, bk = np.inf, 0.0, 0.0, 0
+        for k in range(segs.shape[0]):
+            a0, a1 = segs[k, 0, 0], segs[k, 0, 1]
+            d0, d1 = segs[k, 1, 0] - a0, segs[k, 1, 1] - a1
+            L2 = max(d0 * d0 + d1 * d1, 1e-300)
+            s = min(max(((y2[i, 0] - a0) * d0 + (y2[i, 1] - a1) * d1) / L2, 0.0), 1.0)
+            q0, q1 = a0 + s * d0, a1 + s * d1
+            d2 = (q0 - y2[i, 0]) ** 2 + (q1 - y2[i, 1]) ** 2
+            if d2 < best:
+                best, bq0, bq1, bk = d2, q0, q1, k
+        near[i, 0], near[i, 1] = bq0, bq1
+        dist[i] = np.sqrt(best)
+        d0, d1 = segs[bk, 1, 0] - segs[bk, 0, 0], segs[bk, 1, 1] - segs[bk, 0, 1]
+        L = np.sqrt(max(d0 * d0 + d1 * d1, 1e-300))
+        tdir[i, 0], tdir[i, 1] = d0 / L, d1 / L
 
 
 def contact_transfer(fg: FinGeometry, points: np.ndarray, widths: np.ndarray, *,

@@ -193,8 +193,9 @@ def test_a_stage_the_case_does_not_run_is_not_a_missing_result(tmp_path):
 
 
 def test_the_verdict_names_the_load_sampling_its_peaks_depend_on(tmp_path):
-    """A shell summary with load_sample_interval_s (shell.stage.load_sampling_warning: the peaks are
-    not converged in it) qualifies PASS with that interval; without it (older runs) it does not."""
+    """A shell summary with load_sample_interval_s (shell.stage.load_sampling_warning) qualifies PASS
+    with that interval — coarse, the peaks are under-estimated; fine, they still follow the rope —
+    and without it (older runs) it does not."""
     from flexnet_fe.io import atomic_write_json
     from flexnet_fe.report.rundir import read_run
     from flexnet_fe.report.verdict import build_verdict
@@ -207,3 +208,10 @@ def test_the_verdict_names_the_load_sampling_its_peaks_depend_on(tmp_path):
         atomic_write_json(run / "summary.json", {"shell": {"wing_1": fin, **extra}})
         v = build_verdict(read_run(run))
         assert v.overall == "PASS" and ("10 µs sampling" in v.overall_reason) is said
+        assert ("under-estimates the peaks" in v.overall_reason) is said
+    # sampled finely enough (shell.stage.LOAD_SAMPLING_RESOLVED_S): named, with what it still misses
+    atomic_write_json(run / "summary.json", {"shell": {"wing_1": fin, "load_sample_interval_s": 3.125e-7,
+                                                       "load_sampling_resolved": True}})
+    v = build_verdict(read_run(run))
+    assert "0.312 µs sampling" in v.overall_reason and "not converged in the rope" in v.overall_reason
+    assert "under-estimates" not in v.overall_reason
