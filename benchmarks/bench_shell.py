@@ -442,7 +442,6 @@ def reference_run(K, minv, wfix, normal, loads, dt: float, n_steps: int, alpha: 
     u, v = np.zeros(n, dtype), np.zeros(n, dtype)
     free3 = minv.reshape(-1, NDOF_NODE)[:, :3] > 0
     out = {}
-    P = loads.nodal if loads.basis is None else (loads.basis @ loads.nodal).tocsc()  # per-sample nodal loads
 
     def interp(times, t):
         k = min(int(np.searchsorted(times, t, side="right")) - 1, len(times) - 2)
@@ -454,6 +453,7 @@ def reference_run(K, minv, wfix, normal, loads, dt: float, n_steps: int, alpha: 
         y = np.zeros(n, dtype)
         np.add.at(y, rows, av * x[aj])
         fe = np.zeros(n, dtype)
+        P = loads.nodal
         if len(loads.times) and loads.times[0] <= t <= loads.times[-1]:
             k, sfr = interp(loads.times, t)
             for j, wgt in ((k, 1 - sfr), (k + 1, sfr)):
@@ -528,10 +528,9 @@ def cmd_agreement(args) -> dict:
         mc = np.zeros((3, len(D.mass_t)))
         for c in range(3):
             mc[c, c::NDOF_NODE] = D.mass_t[c::NDOF_NODE]
-        G = sparse.csc_matrix((D.gvals, D.grows, D.gptr), shape=(len(D.minv), len(D.gptr) - 1))
-        C = sparse.csc_matrix((D.vals, D.rows, D.colptr), shape=(len(D.gptr) - 1, len(D.times)))
-        loc_loads = LoadHistory(times=D.times, nodal=(G @ C).tocsc(),
-                                accel_times=D.acc_times, accel=D.acc, mass_c=mc)
+        loc_loads = LoadHistory(times=D.times, nodal=sparse.csc_matrix(
+            (D.vals, D.rows, D.colptr), shape=(len(D.minv), len(D.times))),
+            accel_times=D.acc_times, accel=D.acc, mass_c=mc)
         ref_loc = reference_run(split_to_csr(D.K), D.minv, D.wfix, np.array([0.0, 0.0, 1.0]),
                                 loc_loads, dt, 1000, 50.0, 1e-7, marks)
         ref_loc = {k: lf.to_body(v) for k, v in ref_loc.items()}

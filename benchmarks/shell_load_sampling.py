@@ -85,7 +85,9 @@ def table(out: Path, items: list[str]) -> None:
             label, path = item.split("=", 1)
             d = json.loads(Path(path).read_text())
             s = d["shell"]
-            f.write(json.dumps({"label": label, "load_sample_interval_s": s.get("load_sample_interval_s"),
+            dt = s.get("load_sample_interval_s")  # (older runs: named in the label, "…_10us")
+            dt = dt if dt is not None else float(label.rsplit("_", 1)[1].removesuffix("us")) * 1e-6
+            f.write(json.dumps({"label": label, "load_sample_interval_s": dt,
                                 "peak_von_mises_pa": {k: s[k]["peak_von_mises_pa"] for k in FINS},
                                 "peak_time_after_load_start_s": {
                                     k: s[k]["peak_time_s"] - s[k]["start_time_s"] for k in FINS},
@@ -101,13 +103,13 @@ def plot(src: Path, png: Path) -> None:
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), sharex=True)
     for ax, group in zip(axes, ("wing", "rudder")):
         for fin in [f for f in FINS if f.startswith(group)]:
-            for series, style in (("coarsened", "-o"), ("collision", "s")):
+            for series, style in (("coarsened", "-o"), ("collision", "s"), ("rope_halved", "^")):
                 pts = sorted((r["load_sample_interval_s"] * 1e6, r["peak_von_mises_pa"][fin] / 1e6)
                              for r in rows if r["label"].startswith(series))
                 if pts:
                     x, y = zip(*pts)
                     ax.plot(x, y, style, color=f"C{FINS.index(fin) % 4}", ms=4 if series == "coarsened" else 6,
-                            mfc="none" if series == "collision" else None,
+                            mfc="none" if series != "coarsened" else None,
                             label=fin if series == "coarsened" else None)
         if group == "rudder":
             ax.axhline(503, color="k", ls="--", lw=0.8)
@@ -115,10 +117,12 @@ def plot(src: Path, png: Path) -> None:
         ax.set_xscale("log")
         ax.set_xlabel("fin-load sample interval [µs]")
         ax.set_ylabel("structural peak von Mises [MPa]")
-        ax.set_title(f"{group}s: lines one collision coarsened, squares separate collisions", fontsize=9)
+        ax.set_title(f"{group}s", fontsize=9)
         ax.grid(True, which="both", lw=0.3)
         ax.legend(fontsize=8)
-    fig.suptitle("radar × traction: peak fin stress against the fin loads' time sampling", fontsize=10)
+    fig.suptitle("radar × traction: peak fin stress against the fin loads' time sampling\n"
+                 "lines: one collision (sampled at 0.078 µs) coarsened; squares: other collisions; "
+                 "triangles: rope chords halved", fontsize=9)
     fig.tight_layout()
     fig.savefig(png, dpi=120)
 

@@ -206,7 +206,8 @@ def _collide_step(case, l0: float) -> float:
                                       0.5 * m.body_diameter)
     ea = np.array([rope.youngs_modulus * float(rope_area(rope.diameter)) / piece])
     mass = np.array([mu * piece])
-    return choose_step(cc, ea, mass, mass, m_min, n_seg, rope.radius, fin_half, max(k_body, k_fin)).dt
+    dt = choose_step(cc, ea, mass, mass, m_min, n_seg, rope.radius, fin_half, max(k_body, k_fin)).dt
+    return cc.load_dt / math.ceil(cc.load_dt / dt)  # a whole number of steps per fin-load interval (simulate)
 
 
 def _missile_mass(missile) -> float:

@@ -240,11 +240,6 @@ class LoadHistory:
     """frame (CG) acceleration in B at the samples [m/s²], shape (na, 3)"""
     mass_c: np.ndarray
     """translational lumped mass per component, shape (3, n_owned·5) [kg]"""
-    basis: sparse.csc_matrix | None = None
-    """when set, the loads are factored: the nodal loads at sample k are ``basis @ nodal[:, k]``,
-    ``basis`` (n_owned·5, nb) [N | N m per unit coefficient] and ``nodal`` then the coefficients
-    (nb, nt) [-] (the contact loads on a grid of load points, :func:`flexnet_fe.shell.transfer.
-    basis_transfer`: memory O(load points + events) instead of O(samples × loaded DOFs))"""
 
     def evaluate(self, t: float, out: np.ndarray) -> np.ndarray:
         """Write f(t) into ``out`` (shape (n_owned·5,)) and return it."""
@@ -253,12 +248,10 @@ class LoadHistory:
         if br is not None:
             k, s = br
             P = self.nodal
-            col = np.zeros(P.shape[0])
             for j, wgt in ((k, 1.0 - s), (k + 1, s)):
                 if wgt != 0.0:
                     a, b = P.indptr[j], P.indptr[j + 1]
-                    col[P.indices[a:b]] += wgt * P.data[a:b]
-            out += col if self.basis is None else self.basis @ col
+                    out[P.indices[a:b]] += wgt * P.data[a:b]
         br = _bracket(self.accel_times, t)
         if br is not None:
             k, s = br

@@ -316,18 +316,11 @@ class StepData(NamedTuple):
     times: np.ndarray
     """contact sample times (nt,) [s]"""
     colptr: np.ndarray
-    """CSC column pointer of the contact loads' coefficients over the samples, (nt + 1,): the
-    nodal loads at sample k are Σ_p vals[p] × (basis column rows[p]) over p in colptr[k]:colptr[k+1]"""
+    """CSC column pointer of the nodal contact loads, (nt + 1,)"""
     rows: np.ndarray
-    """CSC row indices (basis columns), (nnz,)"""
+    """CSC row (DOF) indices, (nnz,)"""
     vals: np.ndarray
-    """CSC values [-], (nnz,)"""
-    gptr: np.ndarray
-    """CSC column pointer of the load basis, (nb + 1,)"""
-    grows: np.ndarray
-    """basis row (DOF) indices, (gnnz,)"""
-    gvals: np.ndarray
-    """basis values [N | N m], (gnnz,)"""
+    """CSC values [N], (nnz,)"""
     acc_times: np.ndarray
     """body acceleration sample times (na,) [s]"""
     acc: np.ndarray
@@ -448,10 +441,7 @@ def _scatter_loads(D, t, k, fext, sign):
     for col, w in ((k, 1.0 - s), (k + 1, s)):
         if w != 0.0 and col < len(D.times):
             for p in range(D.colptr[col], D.colptr[col + 1]):
-                a = sign * w * D.vals[p]
-                b = D.rows[p]
-                for q in range(D.gptr[b], D.gptr[b + 1]):
-                    fext[D.grows[q]] += a * D.gvals[q]
+                fext[D.rows[p]] += sign * w * D.vals[p]
     return k
 
 
@@ -606,9 +596,7 @@ def advance_steps(D, P, R, St, H, n_steps):
             for col in (kL, kL + 1):
                 if col < len(D.times):
                     for p in range(D.colptr[col], D.colptr[col + 1]):
-                        b = D.rows[p]
-                        for q in range(D.gptr[b], D.gptr[b + 1]):
-                            fe[D.grows[q]] = 0.0
+                        fe[D.rows[p]] = 0.0
         sc[S_WORK_INT] += work
         sc[S_STEP] = step
         if sample:

@@ -144,21 +144,15 @@ def step_data(model: ShellModel, loads: LoadHistory, frame: LocalFrame,
     op = model.op
     n = op.n_owned
     Tn = sparse.kron(sparse.identity(n // NDOF_NODE, format="csr"), sparse.csr_matrix(frame.T))
-    if loads.basis is None:  # one basis column per sample, coefficient 1
-        G, P = (Tn @ loads.nodal).tocsc(), sparse.identity(len(loads.times), format="csc")
-    else:
-        G, P = (Tn @ loads.basis).tocsc(), loads.nodal.tocsc()
-    for A in (G, P):
-        A.eliminate_zeros()
-        A.sort_indices()
+    P = (Tn @ loads.nodal).tocsc()
+    P.eliminate_zeros()
+    P.sort_indices()
     acc = np.ascontiguousarray(loads.accel, dtype=float).reshape(-1, 3) @ frame.T[:3, :3].T
     ex = exclusion or no_exclusion(len(loads.times))
     return kn.StepData(K=kn.split_upper(op.Kb, frame.T), minv=op.minv, mass=op.mass,
                        mass_t=loads.mass_c.sum(axis=0),
                        times=np.asarray(loads.times, float), colptr=P.indptr.astype(np.int64),
                        rows=P.indices.astype(np.int64), vals=P.data.astype(float),
-                       gptr=G.indptr.astype(np.int64), grows=G.indices.astype(np.int64),
-                       gvals=G.data.astype(float),
                        acc_times=np.asarray(loads.accel_times, float),
                        acc=np.ascontiguousarray(acc), wfix=op.wfix,
                        normal=np.array([0.0, 0.0, 1.0]), zones=ex)

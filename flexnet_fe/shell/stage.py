@@ -24,7 +24,7 @@ from dolfinx.io import XDMFFile
 from mpi4py import MPI
 from scipy import sparse
 
-from flexnet_fe.shell.transfer import FinGeometry, basis_transfer
+from flexnet_fe.shell.transfer import FinGeometry, contact_transfer
 from flexnet_fe.errors import CaseError, NumericalError
 from flexnet_fe.io import read_history_csv, write_history_csv
 from flexnet_fe.progress import progress_bar
@@ -145,11 +145,11 @@ LOAD_SAMPLING_RESOLVED_S = 3.2e-7
 """[s] The fin-load sample interval at and below which the peak stresses no longer follow it
 (``collide.load_interval``). Measured on radar_traction, one collision sampled at 0.078 µs and
 coarsened (benchmarks/shell_load_sampling.py; docs/validation.md, "The fin loads' time
-sampling"): from 10 µs the peaks grow ×5–11 down to 0.3125 µs (the 10 µs sampling low-passed
+sampling"): from 10 µs the peaks grow ×3.9–11 down to 0.3125 µs (the 10 µs sampling low-passed
 rope strikes that last ~1–4 µs); from 0.3125 to 0.156 µs the rudders move +1.5…+6.6 % and three
 wings −5…+10 %. Coarser than this, every run warns that its peaks are under-estimated."""
 
-LOAD_SAMPLING_UNDER = "×5–11 (wings) and ×4–11 (rudders) at 10 µs"
+LOAD_SAMPLING_UNDER = "×4.7–7.5 (wings) and ×3.9–11 (rudders) at 10 µs"
 """How far below the resolved peaks radar_traction's were at the 10 µs sampling."""
 
 
@@ -199,17 +199,17 @@ def fin_load_history(model: ShellModel, contacts: FinContacts, fin_index: int,
     pl = model.fin.plane
     fg = FinGeometry(mesh=model.V.mesh, V=model.V, origin=pl.origin, e1=pl.e1, e2=pl.e2, n=pl.n)
     if len(sel):
-        Gb, W = basis_transfer(fg, contacts.point[sel], contacts.width[sel],
-                               plane_tol=2.0 * model.material.thickness)
+        G = contact_transfer(fg, contacts.point[sel], contacts.width[sel],
+                             plane_tol=2.0 * model.material.thickness)
         rows = np.arange(3 * len(sel))
         cols = np.repeat(contacts.sample[sel], 3)
         F = sparse.csr_matrix((contacts.force[sel].ravel(), (rows, cols)), shape=(3 * len(sel), nt))
-        C, basis = (W @ F).tocsc(), Gb.tocsc()
+        P = (G @ F).tocsc()
     else:
-        C, basis = sparse.csc_matrix((0, nt)), sparse.csc_matrix((model.op.n_owned, 0))
-    C.sort_indices()
-    return LoadHistory(times=contacts.t, nodal=C, accel_times=accel_t, accel=accel,
-                       mass_c=translational_mass(model.op), basis=basis)
+        P = sparse.csc_matrix((model.op.n_owned, nt))
+    P.sort_indices()
+    return LoadHistory(times=contacts.t, nodal=P, accel_times=accel_t, accel=accel,
+                       mass_c=translational_mass(model.op))
 
 
 NODAL_NAMES = ("von_mises_top_nodal_pa", "von_mises_bottom_nodal_pa")

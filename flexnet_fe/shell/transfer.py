@@ -276,58 +276,6 @@ def contact_transfer(fg: FinGeometry, points: np.ndarray, widths: np.ndarray, *,
     return _owned_rows(fg.V, G, comm)
 
 
-BASIS_SPACING = 0.25
-"""Grid spacing of :func:`basis_transfer` over the size of the cells the loads land in [-]. The
-bilinear spreading widens a load by about the spacing: on a clamped plate under a 4.5 mm rope
-load the peak von Mises at the load moved −0.9…−1.7 % / −0.4…−0.7 % / −0.07…−0.2 % at a spacing
-of h/2 with h = 2.5 / 1.25 / 0.625 mm (second order in h); at h/4, −0.2…−0.5 % / −0.08…−0.3 %
-(tests/shell/test_transfer.py). The structural peak outside the St-Venant zone sees less."""
-
-
-def basis_transfer(fg: FinGeometry, points: np.ndarray, widths: np.ndarray, *,
-                   plane_tol: float) -> tuple[sparse.csr_matrix, sparse.csr_matrix]:
-    """(G_b, W): the transfer of many contact events factored through a grid of load points,
-    G ≈ G_b @ W. G_b (n_owned·5, 3·nb) is :func:`contact_transfer` at the nb grid points the
-    events use; W (3·nb, 3·ne) spreads each event's force on the 4 corners of the grid cell it lies
-    in with bilinear weights. The grid spacing is BASIS_SPACING × the cells the loads land in
-    (:func:`_load_cell_size`). Force and moment are those of the events exactly (bilinear weights
-    sum to 1 and reproduce linear functions: Σ w_c x_c = p) whenever no corner lies outside the
-    planform (a corner outside by ≤ the spacing is moved to the edge like an event,
-    :func:`_snap_to_planform`). Points are snapped to the planform first, as
-    :func:`contact_transfer` does. Why: the fin loads sampled every 0.16 µs are ~4e5 events per
-    fin, each a stencil of ~100 nodes — 2 GB of nodal loads per fin; the events of a fin land on
-    a few 1e4 grid points (tests/shell/test_transfer.py measures the difference to G)."""
-    points = np.asarray(points, dtype=float).reshape(-1, 3)
-    widths = np.asarray(widths, dtype=float).ravel()
-    ne = len(points)
-    rel = points - fg.origin
-    off = rel @ fg.n
-    bad = np.flatnonzero(np.abs(off) > plane_tol)
-    if len(bad):
-        raise ValueError(f"contact event {bad[0]} at {points[bad[0]]} m is {off[bad[0]]:.3e} m off "
-                         f"the fin plane (tolerance {plane_tol:.3e} m)")
-    p2 = np.column_stack([rel @ fg.e1, rel @ fg.e2])
-    _snap_to_planform(fg, _boundary_segments(fg), p2, points, plane_tol)
-    plane = np.vstack([fg.e1, fg.e2])
-    q = BASIS_SPACING * _load_cell_size(fg, p2 @ plane + fg.origin)
-    g = np.floor(p2 / q)
-    f = p2 / q - g
-    corner = np.array([[0, 0], [1, 0], [0, 1], [1, 1]])
-    wc = np.column_stack([(1 - f[:, 0]) * (1 - f[:, 1]), f[:, 0] * (1 - f[:, 1]),
-                          (1 - f[:, 0]) * f[:, 1], f[:, 0] * f[:, 1]])  # (ne, 4)
-    keys = np.column_stack([(g[:, None, :] + corner[None]).reshape(-1, 2), np.repeat(widths, 4)])
-    uniq, inv = np.unique(keys, axis=0, return_inverse=True)
-    inv = inv.ravel()
-    Gb = contact_transfer(fg, (uniq[:, :2] * q) @ plane + fg.origin, uniq[:, 2],
-                          plane_tol=max(plane_tol, 2.0 * q))  # (a corner is ≤ √2 q from its event)
-    ev = np.repeat(np.arange(ne), 4)
-    rows = (3 * inv[:, None] + np.arange(3)).ravel()
-    cols = (3 * ev[:, None] + np.arange(3)).ravel()
-    W = sparse.csr_matrix((np.repeat(wc.ravel(), 3), (rows, cols)), shape=(3 * len(uniq), 3 * ne))
-    W.sum_duplicates()
-    return Gb, W
-
-
 def _load_cell_size(fg: FinGeometry, centres3: np.ndarray) -> float:
     """Median over the contact points ``centres3`` (ne, 3) [m] of the shortest edge of the cell
     each lies in [m] (all ranks; the fin's shortest edge when there is no point): the size

@@ -82,7 +82,7 @@ def collide_map(ctx: Context) -> list[dict]:
     from flexnet_fe.collide.simulate import simulate
     from flexnet_fe.missile.build import build_missile
 
-    case = case_with(CASE, QUICK_COLLIDE + ("collide.output_interval=1e-4",))
+    case = case_with(CASE, QUICK_COLLIDE + ("collide.output_interval=1e-4", "collide.load_interval=1e-4"))
     net = held_net(case.net, case.collide.net_source, None)
     missile = build_missile(case.missile)
     g, rho = isa(case.atmosphere.altitude).gravity, isa(case.atmosphere.altitude).density
@@ -141,6 +141,7 @@ def shell_map(ctx: Context) -> list[dict]:
 
 CONTACT_SCENE = ("collide.net_source='flat_taut'", "net.edge_length=0.6", "net.mesh_size=0.1",
                  "collide.stiffness_rule='given'", "collide.snapshots=2", "collide.output_interval=1e-4",
+                 "collide.load_interval=1e-4",
                  "collide.rope_split=1", *NO_FIN_CUT)
 """A 0.6 m flat patch of the rope (49 nodes) centred on the missile's path: the nose, body and
 the four wings and rudders pass through it (the wings reach beyond the body's radius). Ropes not
