@@ -41,8 +41,8 @@ class Exclusion(NamedTuple):
     ``ptr[k]:ptr[k+1]`` (CSR over samples), each a ball of ``radius`` around ``centre``. Which
     nodes a zone holds is found when it is needed (:func:`mark`): the nodes are bucketed on a
     cubic grid of cell ``cell`` ≥ the largest radius, so a zone looks at 3 × 3 × 3 cells. Memory
-    O(events + nodes) — a list of nodes per sample grew with samples × zone area (≈ 0.8 GB per fin
-    at the fin loads' 0.156 µs sampling)."""
+    O(events + nodes) — a list of nodes per sample grew with samples × zone area (the fin loads
+    sampled every 0.156 µs are ~4e5 events per fin, each zone ~1e3 nodes)."""
 
     ptr: np.ndarray
     """(nt + 1,) int64 offsets into the events"""

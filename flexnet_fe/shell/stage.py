@@ -191,9 +191,8 @@ def load_sampling_warning(contacts: FinContacts) -> str:
 
 def fin_load_history(model: ShellModel, contacts: FinContacts, fin_index: int,
                      accel_t: np.ndarray, accel: np.ndarray) -> LoadHistory:
-    """Load history of one fin, factored (``LoadHistory.basis``): the events' forces F (3·ne, nt)
-    spread on a grid of load points, C = W F (one sparse product for all samples), and the
-    transfer G_b of those points (:func:`flexnet_fe.shell.transfer.basis_transfer`)."""
+    """Nodal load history of one fin: transfer matrix G (once) then P = G F, one sparse product
+    for all samples (F: event forces arranged by sample, shape (3·ne, nt))."""
     sel = np.flatnonzero(contacts.fin == fin_index)
     nt = len(contacts.t)
     pl = model.fin.plane
