@@ -103,12 +103,12 @@ def mark(Z, k0, k1, mask, value):
     for e in range(Z.ptr[max(k0, 0)], Z.ptr[min(k1, len(Z.ptr) - 1)]):
         c0, c1, c2 = Z.centre[e, 0], Z.centre[e, 1], Z.centre[e, 2]
         r2 = Z.radius[e] * Z.radius[e]
-        g = np.empty(3, np.int64)
-        for a in range(3):
-            g[a] = int(np.floor((Z.centre[e, a] - Z.lo[a]) / Z.cell))
-        for bz in range(max(g[2] - 1, 0), min(g[2] + 2, Z.dims[2])):
-            for by in range(max(g[1] - 1, 0), min(g[1] + 2, Z.dims[1])):
-                for bx in range(max(g[0] - 1, 0), min(g[0] + 2, Z.dims[0])):
+        gx = int(np.floor((c0 - Z.lo[0]) / Z.cell))
+        gy = int(np.floor((c1 - Z.lo[1]) / Z.cell))
+        gz = int(np.floor((c2 - Z.lo[2]) / Z.cell))
+        for bz in range(max(gz - 1, 0), min(gz + 2, Z.dims[2])):
+            for by in range(max(gy - 1, 0), min(gy + 2, Z.dims[1])):
+                for bx in range(max(gx - 1, 0), min(gx + 2, Z.dims[0])):
                     b = bx + Z.dims[0] * (by + Z.dims[1] * bz)
                     for p in range(Z.bptr[b], Z.bptr[b + 1]):
                         i = Z.bnodes[p]

@@ -165,7 +165,10 @@ def load_sampling_resolved(contacts: FinContacts) -> bool | None:
     """Whether the fin loads are sampled finely enough for the peaks not to follow the sampling
     (interval ≤ LOAD_SAMPLING_RESOLVED_S); None without contact loads (summary
     ``load_sampling_resolved``)."""
-    dt = load_sample_interval(contacts)
+    return _resolved(load_sample_interval(contacts))
+
+
+def _resolved(dt: float | None) -> bool | None:
     return None if dt is None else dt <= LOAD_SAMPLING_RESOLVED_S * (1 + 1e-9)
 
 
@@ -176,7 +179,7 @@ def load_sampling_warning(contacts: FinContacts) -> str:
     dt = load_sample_interval(contacts)
     if dt is None:
         return ""
-    if not load_sampling_resolved(contacts):
+    if not _resolved(dt):
         return (f"shell: the fin loads are the collision's means over {dt * 1e6:.3g} µs (collide.load_interval), "
                 f"linear between samples — a low-pass of about {0.5e-3 / dt:.3g} kHz that cuts the rope's strikes "
                 f"(1–4 µs): the peak stresses are UNDER-ESTIMATED (radar_traction: {LOAD_SAMPLING_UNDER} against "
