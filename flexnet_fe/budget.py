@@ -162,7 +162,9 @@ def collide_cost(case, file) -> StageCost:
     segments at a node 4 (a rotary net's hub: its warps). Memory: the process, the held net and
     its work arrays (≈ 100 floats per node and per segment, as deploy; not measured separately)
     and ≈ 40 history columns per output row; disk: snapshots (60 B per node) × snapshots. With
-    ``resolution_check`` the steps add the second impact's, at half the pieces."""
+    ``resolution_check`` the steps add the second impact's, at half the pieces, and the memory is
+    counted twice (it runs in a second process beside the first on two cores or more:
+    ``collide.stage.check_beside``)."""
     cc, net = case.collide, case.net
     nodes, segs, l0, c = check_net(net, file)
     energy = 0.5 * _missile_mass(case.missile) * cc.impact_speed * cc.impact_speed
@@ -173,7 +175,7 @@ def collide_cost(case, file) -> StageCost:
         half = cc.model_copy(update={"fin_piece_length": 0.5 * cc.fin_piece_length})
         steps += cc.end_time / _collide_step(case.model_copy(update={"collide": half}), l0)
     rows = cc.end_time / cc.output_interval  # up to the cap: the run goes on while the contact does
-    mem = BASE_PROCESS + 100 * F8 * (nodes + segs) + 40 * F8 * rows
+    mem = (BASE_PROCESS + 100 * F8 * (nodes + segs) + 40 * F8 * rows) * (2 if cc.resolution_check else 1)
     cost = StageCost("collide", nodes, 3 * nodes + 6, steps, mem,
                      60 * (nodes + segs) * cc.snapshots + 40 * 25 * rows,
                      {"nodes": "net.mesh_size", "steps": "collide.impact_speed",
@@ -322,6 +324,3 @@ def check_budget(costs: list[StageCost], file, out_dir: Path | None = None,
 def describe(costs: list[StageCost]) -> str:
     return "\n".join("  " + c.line() for c in costs)
 
-
-def cpu_count() -> int:
-    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)

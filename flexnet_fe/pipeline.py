@@ -40,6 +40,7 @@ from flexnet_fe import __version__
 from flexnet_fe.config import Case, case_hash, resolved_dict
 from flexnet_fe.errors import CaseError, FlexnetError, RunIOError, StageInterrupted
 from flexnet_fe.io import atomic_write_json, read_json
+from flexnet_fe.machine import launched_by_mpirun
 from flexnet_fe.runs import (RESOLVED, STAGE_LOG, STATUS, SUMMARY, RunLock, StageContext, check_run_dir,
                              last_output_time, me, now, partial_dir, process_alive, publish_stage,
                              interrupt_handled, signal_handlers, stage_dir)
@@ -159,7 +160,7 @@ def _stage_logger(folder: Path, stage: Stage) -> tuple[logging.Logger, logging.H
 
 def _mpi_world():
     """MPI.COMM_WORLD when launched by mpirun with more than one rank, else None (no import)."""
-    if not any(k in os.environ for k in ("OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_RANK", "MPI_LOCALNRANKS")):
+    if not launched_by_mpirun():
         return None
     from mpi4py import MPI
 
@@ -170,7 +171,7 @@ def _petsc_on_self():
     """Under mpirun but running a case alone (a sweep worker): initialise PETSc on COMM_SELF
     before dolfinx is imported (its default, COMM_WORLD, is collective over all the workers).
     Returns MPI.COMM_SELF then, else None."""
-    if not any(k in os.environ for k in ("OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_RANK", "MPI_LOCALNRANKS")):
+    if not launched_by_mpirun():
         return None
     from mpi4py import MPI
 

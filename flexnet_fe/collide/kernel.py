@@ -1,4 +1,5 @@
-"""The compiled collision loop: ``advance(model, state, n_steps, dt)`` (data in ``collide.model``).
+"""The compiled collision loop: ``advance(model, state, n_steps, dt)`` (data in ``collide.model``);
+``advance_kept`` with the loop's scratch kept from call to call (``new_work``).
 
 Per step (symplectic Euler for the net nodes and the rigid missile, ``rigid_body.rigid_step``):
 
@@ -43,7 +44,7 @@ segment to a fixed set changes by at most D, because every point (1 − s) a + s
 (D + 2D)/3. So a segment left out with clearance c > 0 cannot touch while each of its ends has
 moved by less than c; every node gets the smallest c of its left-out segments as its margin,
 ``_to_body`` compares each node's displacement with it every step, and the list is rebuilt as
-soon as one node reaches its margin (and at the start of every call). The same holds per part:
+soon as one node reaches its margin (and at the start of every far-net window, and of a new work). The same holds per part:
 each candidate keeps the parts whose own bound is ≤ CANDIDATE_SKIN (``_part_mask``; the bounds of
 the parts left out join its nodes' margins), and the step skips the others as failed gates. The
 segments a step evaluates are then a superset of those in contact, in the same (increasing) order,
@@ -54,8 +55,10 @@ same arithmetic in the same order as with no broad phase (tests/collide/test_ker
 Far net (``advance(..., ratio)``; multiple time stepping, the impulse method of Grubmüller et al.
 1991 / r-RESPA, Tuckerman et al. 1992, with lazy positions as in asynchronous variational
 integrators, Lew et al. 2003). The step is set by the contact of the lightest rope pieces at the
-fins, ~1/300 of the rope springs' own limit, yet only the rope near the missile can touch it. Each
-call is cut into windows of ``ratio`` steps. At a window's start (``_far_window``) every node's
+fins, ~1/300 of the rope springs' own limit, yet only the rope near the missile can touch it. The
+steps are cut into windows of ``ratio`` steps; a window ends by the call's ``horizon`` (a call of
+``advance``: its own end; ``advance_kept``: the next output time, so windows run on across the
+fin-load intervals' calls). At a window's start (``_far_window``) every node's
 largest speed relative to the missile's frame v_max gives the bound d = FAR_BOUND_FACTOR × v_max ×
 window; a live segment whose clearance exceeds d cannot touch any part within the window (the
 clearance is 1-Lipschitz in its ends' displacements, as for the candidate list) and is slow; the
@@ -141,7 +144,7 @@ def _world_rate(r, h, inv_inertia):
 
 
 class StepWork(NamedTuple):
-    """Scratch of one call (allocated once per call): r (3, 3) attitude B → W; w_w [rad/s] (3,)
+    """Scratch of the loop, kept across calls (``new_work``) while the model does not change: r (3, 3) attitude B → W; w_w [rad/s] (3,)
     missile rate in W; f [N] (n, 3) forces on the nodes; fmt (6,) force [N] and torque about the
     CG [N m] on the missile, W; pbn [m] (n, 3) node positions in B; nb (3,) contact normal and
     qb [m] (3,) contact point of the current pair, B.
@@ -164,10 +167,13 @@ class StepWork(NamedTuple):
     (nodes of fast segments), nlist (3,) int64 their counts (fast segments, slow segments, fast
     nodes); isfast (n,) bool; pwin [m] (n, 3) node positions in B at the window's start; dfar [m]
     (n,) how far each node whose motion the window's split relies on may move in B during the
-    window (inf: not checked); cseg [m] (ns,) each segment's clearance at the call's first window,
+    window (inf: not checked); cseg [m] (ns,) each segment's clearance at the last full split,
     pfull [m] (n, 3) the node positions in B then, dfull [m] (n,) each node's displacement since;
-    wasfast (ns,) bool scratch of ``_far_split``. Single rate (ratio 1): every segment and node
-    fast, dfar inf."""
+    wasfast (ns,) bool scratch of ``_far_split``; refresh (2,) int64: [0] ≠ 0 when the next split
+    must evaluate every segment (a new work, or the last split re-evaluated more than
+    REFRESH_SHARE of them), [1] the full splits made; win (1,) int64 the steps left in the open
+    window (0: none; a window may span calls, ``advance_kept``'s horizon). Single rate (ratio 1):
+    every segment and node fast, dfar inf."""
 
     r: np.ndarray
     w_w: np.ndarray
@@ -196,6 +202,8 @@ class StepWork(NamedTuple):
     dfull: np.ndarray
     wasfast: np.ndarray
     cmask: np.ndarray
+    refresh: np.ndarray
+    win: np.ndarray
 
 
 @njit(cache=True)
@@ -223,15 +231,16 @@ def _fin_half_spaces(model):
 
 @njit(cache=True)
 def _work(model, n):
-    """The scratch of one call for ``n`` nodes; the candidate list is empty and every node's margin
-    0, so the first step builds it; every segment and node is fast (single rate)."""
+    """A new scratch for ``n`` nodes; the candidate list is empty and every node's margin 0, so the
+    first step builds it; every segment and node is fast (single rate); the first split is full."""
     ns = model.seg.shape[0]
     return StepWork(np.eye(3), np.zeros(3), np.zeros((n, 3)), np.zeros(6), np.zeros((n, 3)), np.zeros(3),
                     np.zeros(3), np.zeros(ns, np.int64), np.zeros(2, np.int64), np.zeros((n, 3)), np.zeros(n),
                     _fin_half_spaces(model), model.fin_half + model.rope_radius, np.zeros((n, 6)), np.zeros(12),
                     np.arange(ns), np.zeros(ns, np.int64), np.arange(n), np.array([ns, 0, n]),
                     np.ones(n, np.bool_), np.zeros((n, 3)), np.full(n, np.inf), np.zeros(ns), np.zeros((n, 3)),
-                    np.zeros(n), np.zeros(ns, np.bool_), np.zeros(ns, np.int64))
+                    np.zeros(n), np.zeros(ns, np.bool_), np.zeros(ns, np.int64), np.array([1, 0]),
+                    np.zeros(1, np.int64))
 
 
 @njit(cache=True)
@@ -795,15 +804,30 @@ def _far_check(model, state, wk, alln):
     return far
 
 
+REFRESH_SHARE = 0.25
+"""A far-net split that had to evaluate ``_clearance`` again for more than this share of the live
+segments (their kept clearance, less their ends' displacements since, no longer proves them slow)
+asks the next split to evaluate every segment afresh (``StepWork.refresh``): about the same cost
+once, and the kept bounds are tight again."""
+
+
 @njit(cache=True)
-def _far_split(model, state, wk, d, full):
+def _far_split(model, state, wk, d):
     """Split the live segments (positions in B: wk.pbn) into fast (clearance ≤ d [m]: may touch a
     part within the window; or ``model.always_fast``) and slow, in increasing order, with the fast nodes; the segments that
     turn slow have their contact slots reset (they cannot touch) and every node of a slow segment
-    gets the bound d. ``full``: evaluate ``_clearance`` for every segment and keep it in wk.cseg
-    with the positions in wk.pfull; otherwise a segment whose kept clearance, less the larger of
-    its ends' displacements since (1-Lipschitz, module docstring), still exceeds d is slow
-    without a new evaluation (the first window of each call is full)."""
+    gets the bound d. A full split (wk.refresh[0] ≠ 0: a new work, or REFRESH_SHARE) evaluates
+    ``_clearance`` for every segment and keeps it in wk.cseg with the positions in wk.pfull;
+    otherwise a segment whose kept clearance, less the larger of its ends' displacements since
+    (1-Lipschitz, module docstring), still exceeds d is slow without a new evaluation. Either way
+    the split is the same (each segment's test is exact about c ≤ d); the work is kept across
+    calls, so a call's first window no longer pays for a full split (0.6 ms on radar × traction's
+    9 561 segments, once per fin-load interval)."""
+    full = wk.refresh[0] != 0
+    if full:
+        wk.refresh[0] = 0
+        wk.refresh[1] += 1
+    n_eval, n_live = 0, 0
     nf = model.fin_half.shape[0]
     seg, alive, pbn, isfast, cseg, pfull = model.seg, state.alive, wk.pbn, wk.isfast, wk.cseg, wk.pfull
     pinned = model.always_fast
@@ -825,6 +849,7 @@ def _far_split(model, state, wk, d, full):
         if not alive[e]:
             continue
         i, j = seg[e, 0], seg[e, 1]
+        n_live += 1
         if full:
             cseg[e] = _clearance(model.bbox, model.rope_radius, wk.fin_pl, wk.fin_rh, model.nose_cones, pbn[i],
                                  pbn[j], d)
@@ -832,6 +857,7 @@ def _far_split(model, state, wk, d, full):
         else:
             c = cseg[e] - max(dmov[i], dmov[j])
             if c <= d:
+                n_eval += 1
                 c = _clearance(model.bbox, model.rope_radius, wk.fin_pl, wk.fin_rh, model.nose_cones, pbn[i],
                                pbn[j], d)
         if c <= d or (e < n_pinned and pinned[e]):
@@ -859,10 +885,12 @@ def _far_split(model, state, wk, d, full):
         wk.dfar[seg[e, 0]] = d
         wk.dfar[seg[e, 1]] = d
     wk.nlist[0], wk.nlist[1], wk.nlist[2] = nfs, nss, nfn
+    if n_eval > REFRESH_SHARE * n_live:
+        wk.refresh[0] = 1
 
 
 @njit(cache=True)
-def _far_window(model, state, wk, alln, w, dt, full):
+def _far_window(model, state, wk, alln, w, dt):
     """Start a window of w steps of dt [s] (module docstring, "Far net"): check the last window's
     bounds, split the segments (``_far_split``) with the bound d = FAR_BOUND_FACTOR × w dt × the
     largest node speed relative to the missile's frame, and give the slow segments' forces (and
@@ -879,7 +907,7 @@ def _far_window(model, state, wk, alln, w, dt, full):
         rel = np.sqrt((v[i, 0] - mv[0]) ** 2 + (v[i, 1] - mv[1]) ** 2 + (v[i, 2] - mv[2]) ** 2)
         arm = np.sqrt((x[i, 0] - mx[0]) ** 2 + (x[i, 1] - mx[1]) ** 2 + (x[i, 2] - mx[2]) ** 2)
         vmax = max(vmax, rel + wmag * arm)
-    _far_split(model, state, wk, FAR_BOUND_FACTOR * vmax * tw, full)
+    _far_split(model, state, wk, FAR_BOUND_FACTOR * vmax * tw)
     f, isfast = wk.f, wk.isfast
     for i in range(x.shape[0]):
         for k in range(3):
@@ -951,9 +979,8 @@ def _fine_step(model, state, wk, dt, step, mv0, air):
 
 
 @njit(cache=True)
-def _advance(model, state, n_steps, dt, ratio):
+def _advance(model, state, wk, n_steps, dt, ratio, horizon):
     n = state.x.shape[0]
-    wk = _work(model, n)
     alln = np.arange(n)
     acc = state.acc
     for k in range(3):
@@ -964,20 +991,26 @@ def _advance(model, state, n_steps, dt, ratio):
     mv0 = np.empty(3)
     step = 0
     while step < n_steps:
-        w = n_steps - step if ratio <= 1 else min(ratio, n_steps - step)
+        run = n_steps - step
         if ratio > 1:
-            wk.r[:, :] = quat_to_matrix(state.mq)
-            wk.w_w[0], wk.w_w[1], wk.w_w[2] = _world_rate(wk.r, state.mh, model.inv_inertia)
-            if _far_window(model, state, wk, alln, w, dt, step == 0) != OK:
-                return FAR
-        for s in range(step, step + w):
+            if wk.win[0] == 0:  # open a window: at most ratio steps, ending by the horizon
+                w = min(ratio, horizon - step)
+                wk.r[:, :] = quat_to_matrix(state.mq)
+                wk.w_w[0], wk.w_w[1], wk.w_w[2] = _world_rate(wk.r, state.mh, model.inv_inertia)
+                if _far_window(model, state, wk, alln, w, dt) != OK:
+                    return FAR
+                wk.win[0] = w
+            run = min(run, wk.win[0])
+        for s in range(step, step + run):
             status = _fine_step(model, state, wk, dt, s, mv0, ratio <= 1)
             if status != OK:
                 return status
-        step += w
+        step += run
+        if ratio > 1:
+            wk.win[0] -= run
     wk.r[:, :] = quat_to_matrix(state.mq)
-    if ratio > 1 and _far_check(model, state, wk, alln):
-        return FAR
+    if ratio > 1 and wk.win[0] == 0 and _far_check(model, state, wk, alln):  # (an open window's
+        return FAR                                                              # at its end)
     for i in range(n):
         if not (np.isfinite(state.x[i, 0]) and np.isfinite(state.x[i, 1]) and np.isfinite(state.x[i, 2])):
             return NONFINITE
@@ -1004,13 +1037,38 @@ def _stored_contact_energy(model, state, wk):
 def advance(model, state, n_steps, dt, ratio=1):
     """Advance ``state`` (``model.CollideState``) in place by ``n_steps`` steps of ``dt`` [s]
     under ``model`` (``model.CollideModel``), the far net in windows of ``ratio`` steps (module
-    docstring, "Far net"; 1: every segment every step). Returns the status OK, TUNNEL (a rope
+    docstring, "Far net"; 1: every segment every step), with a new work (``advance_kept``: a kept
+    one). Returns the status OK, TUNNEL (a rope
     centre line reached a part's core and the model does not allow it; ``state.acc[A_TUN_*]``
     say where), FAR (a node moved farther in a window than its bound) or NONFINITE. Subnormal floats are flushed to zero during the call (``collide.fpu``); the
     caller's floating-point control register is restored on return."""
+    return advance_kept(model, state, _work(model, state.x.shape[0]), n_steps, dt, ratio, n_steps)
+
+
+@njit(cache=True)
+def new_work(model, state):
+    """The loop's scratch (``StepWork``) for ``model`` and ``state``'s nodes, to pass to every
+    ``advance_kept`` call while the model, its node count and the window ``ratio`` stay the same."""
+    return _work(model, state.x.shape[0])
+
+
+@njit(cache=True)
+def advance_kept(model, state, wk, n_steps, dt, ratio, horizon):
+    """``advance`` with the work ``wk`` (``new_work``) kept from call to call: its far-net
+    clearances and candidate list carry over, so a call costs what its steps cost (a new work
+    costs a full far-net split and a candidate rebuild over every segment, ≈ 0.8 ms on radar ×
+    traction — once per fin-load interval); every kept bound is re-checked, not trusted.
+
+    horizon ≥ n_steps: the steps from this call's start to the next time at which every far-net
+    window must have ended (the caller reads the whole net's state there: the output interval's
+    end). A window opened in this call may then run on into the next calls: the fin-load
+    intervals (``collide.load_interval``) no longer cut the windows short. Between two such calls
+    the slow nodes stand at their window's end (they move once per window); only the fast nodes
+    and the contacts may be read there. Calls of n steps with horizon H give the run of calls of H
+    steps to the last bit (tests/collide/test_far_net.py)."""
     old = get_mxcsr()
     set_mxcsr(old | np.uint32(FTZ_DAZ))
-    status = _advance(model, state, n_steps, dt, ratio)
+    status = _advance(model, state, wk, n_steps, dt, ratio, horizon)
     set_mxcsr(old)
     return status
 

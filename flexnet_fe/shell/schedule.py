@@ -32,7 +32,6 @@ state; each kernel call is the serial code), so the results are those of one wor
 from __future__ import annotations
 
 import math
-import os
 import threading
 from concurrent.futures import ThreadPoolExecutor
 from typing import Callable, NamedTuple, Sequence, TypeVar
@@ -80,12 +79,6 @@ def window_steps(window: FinWindow, dt: float, every: int) -> tuple[int, int]:
     start = every * max(0, math.floor(window.load_start_s / row) - 1)
     end = every * max(1, math.ceil(window.end_s / row))
     return start, max(end - start, every)
-
-
-def default_workers() -> int:
-    """Cores this process may run on."""
-    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (
-        os.cpu_count() or 1)
 
 
 J = TypeVar("J")

@@ -33,10 +33,11 @@ from flexnet_fe.shell.explicit import (Backend, LoadHistory, critical_step, max_
                                        translational_mass)
 from flexnet_fe.shell.forms import NDOF_NODE, ShellMaterial
 from flexnet_fe.shell.meshio import load_fin_mesh
+from flexnet_fe.machine import cpu_count
 from flexnet_fe.shell.model import ShellModel, build_model
 from flexnet_fe.shell import hotspot
 from flexnet_fe.shell.recovery import build_recovery, locate_peak, stress_tensors, von_mises
-from flexnet_fe.shell.schedule import (AFTER_RATIO_LIMIT, IO_LOCK, FinWindow, default_workers,
+from flexnet_fe.shell.schedule import (AFTER_RATIO_LIMIT, IO_LOCK, FinWindow,
                                       fin_window, run_all, window_steps)
 from flexnet_fe.shell.solve import ParallelSampler, RunResult, recovery_for, run
 from flexnet_fe.runs import ENVELOPE_XDMF, FIELDS_XDMF, HISTORY
@@ -658,7 +659,7 @@ def run_shell(shell: ShellConfig, fins: list[FinSpec], contacts_npz: Path,
     jobs = [_setup_fin(shell, spec, contacts, acc_t, acc, stage_dir, end_time, log, comm)
             for spec in specs]
     t_setup = time.perf_counter()
-    workers = 1 if comm.size > 1 else min(shell.workers or default_workers(), max(len(jobs), 1))
+    workers = 1 if comm.size > 1 else min(shell.workers or cpu_count(), max(len(jobs), 1))
     total = sum(j.steps.n_steps for j in jobs)
     log.info("shell: %d fins, %d steps in all, on %d thread(s)", len(jobs), total, workers)
     with progress_bar(total, f"shell ({len(jobs)} fins, {workers} thread(s))") as bar:

@@ -144,3 +144,45 @@ def test_always_fast_segments_are_stepped_every_step(radar, log, scenes):
     assert st16.acc[M.A_FAST_SEG_STEPS] == pytest.approx(km.seg.shape[0] * 255 * int(round(T_END / (255 * dt))))
     assert np.max(np.abs(st16.x - st1.x)) < 1e-9 * np.max(np.abs(st1.x))
     assert np.max(np.abs(st16.mv - st1.mv)) < 1e-9 * np.max(np.abs(st1.mv))
+
+
+@pytest.mark.parametrize("ratio", [1, 8])
+def test_kept_work_gives_the_run_of_a_new_work_per_call(radar, log, scenes, ratio):
+    # Reference: the same impact with a new work in every call (``advance``: every call's first
+    # far-net split evaluates every segment, its first step rebuilds the candidate list) — the
+    # kept work (``advance_kept``) carries the clearances and the candidate list over and re-checks
+    # them; every split and every contact must come out the same, so the two states are equal to
+    # the last bit. Calls of 16 steps (two windows of 8) as the fin-load intervals make them, 3 ms:
+    # the missile goes through the net, the split and the candidates change throughout.
+    km, st, setup = _scene(radar, log, scenes)
+    kept = _copy(st)
+    wk = K.new_work(km, kept)
+    dt = setup.step.dt
+    for _ in range(int(round(T_END / (16 * dt)))):
+        assert K.advance(km, st, 16, dt, ratio) == M.OK
+        assert K.advance_kept(km, kept, wk, 16, dt, ratio, 16) == M.OK
+    assert st.acc[M.A_DISS_CONTACT] > 0.0  # contacts were active
+    assert all(np.array_equal(getattr(st, f), getattr(kept, f)) for f in st._fields)
+    if ratio > 1:  # the kept clearances were used: fewer full splits than calls
+        assert 0 < wk.refresh[1] < int(round(T_END / (16 * dt)))
+
+
+def test_windows_run_on_across_calls_up_to_the_horizon(radar, log, scenes):
+    # Reference: the same impact in calls of 64 steps, windows of 24 steps (24, 24, 16 per call).
+    # In calls of 16 steps with the horizon at each 64-step block's end (the fin loads sampled
+    # four times per output interval) the windows run on across the calls (24 = 16 + 8, …) and
+    # must be the same windows: the two states are equal to the last bit at every block's end.
+    km, st, setup = _scene(radar, log, scenes)
+    split = _copy(st)
+    wk, wk_split = K.new_work(km, st), K.new_work(km, split)
+    dt = setup.step.dt
+    for _ in range(int(round(T_END / (64 * dt)))):
+        assert K.advance_kept(km, st, wk, 64, dt, 24, 64) == M.OK
+        for j in range(4):
+            assert K.advance_kept(km, split, wk_split, 16, dt, 24, 64 - 16 * j) == M.OK
+            assert wk_split.win[0] == (8, 16, 0, 0)[j]  # windows left open between the calls
+        assert all(np.array_equal(getattr(st, f), getattr(split, f)) for f in st._fields if f != "acc")
+    assert st.acc[M.A_DISS_CONTACT] > 0.0
+    whole = [i for i in range(M.N_ACC) if i not in (M.A_IMP_B, M.A_IMP_B + 1, M.A_IMP_B + 2, M.A_PEN_INT,
+                                                     M.A_NCONTACT, M.A_FCONTACT)]  # (per call)
+    assert np.array_equal(st.acc[whole], split.acc[whole])

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import logging
+import multiprocessing
+import signal
 
 import pytest
 from pydantic import ValidationError
@@ -12,6 +14,8 @@ from flexnet_fe.collide.config import CollideConfig
 from flexnet_fe.collide.resolution import resolution_moves
 from flexnet_fe.collide.scene import held_net
 from flexnet_fe.collide.simulate import simulate
+from flexnet_fe.errors import NumericalError
+from flexnet_fe.collide import stage
 from flexnet_fe.collide.stage import run_collide
 from flexnet_fe.missile.build import build_missile
 from flexnet_fe.missile.config import MissileConfig
@@ -48,10 +52,13 @@ def test_check_needs_a_piece_length_to_halve():
         CollideConfig(resolution_check=True)
 
 
-def test_stage_reports_the_moves_of_the_two_runs(tmp_path):
+@pytest.mark.parametrize("beside", [True, False])
+def test_stage_reports_the_moves_of_the_two_runs(tmp_path, monkeypatch, beside):
     # Reference: a second model, the same impact run by hand at half the pieces — both the pieces
     # cut at the start and the chord they are cut to where they press (simulate is deterministic):
-    # the stage's moves are exactly those of the two summaries.
+    # the stage's moves are exactly those of the two summaries, whether the check's impact ran in a
+    # second process beside the run's (two cores) or after it in this one.
+    monkeypatch.setattr(stage, "check_beside", lambda: beside)
     net_cfg = TractionNet(edge_length=1.0, mesh_size=0.05, rope_diameter=4.5e-3, corner_mass=1e-3,
                           transverse_modulus=1e11)
     cfg = CollideConfig(net_source="flat_taut", duration=4e-3, aim_point=(0.025, 0.025), snapshots=2,
@@ -69,3 +76,41 @@ def test_stage_reports_the_moves_of_the_two_runs(tmp_path):
     assert s["cut_segments"] > 0 and fine["cut_segments"] > 0  # the chord rule was at work in both
     assert got == expected and got["fin_impulse_move_rel"]  # fins were hit and checked
     assert all(w in s["warnings"] for w in warnings)
+
+
+def test_a_failing_check_stops_the_stage_with_its_reason(tmp_path):
+    # Reference: the check's own error. A contact far too soft for the impact (K = 1 N/m^1.5, given)
+    # lets the rope's centre line reach a fin's core in both impacts; the run's impact stops first
+    # or the check's does — either way the stage raises the one-line tunnelling error (the check's
+    # is labelled as the check's), the check's process is gone, and nothing is written.
+    net_cfg = TractionNet(edge_length=1.0, mesh_size=0.05, rope_diameter=4.5e-3, corner_mass=1e-3)
+    cfg = CollideConfig(net_source="flat_taut", duration=4e-3, aim_point=(0.025, 0.025), snapshots=2,
+                        fin_piece_length=4e-3, resolution_check=True, stiffness_rule="given", contact_stiffness=1.0)
+    with pytest.raises(NumericalError, match="tunnelling"):
+        run_collide(net_cfg, None, MissileConfig(preset="radar"), cfg, isa(8000.0), None, tmp_path, LOG)
+    assert not (tmp_path / "history.csv").exists()
+    assert not [p for p in multiprocessing.active_children() if p.name == "flexnet-resolution-check"]
+
+
+def test_the_check_process_error_reaches_the_stage_as_one_line(monkeypatch):
+    # Reference: the check's own error, raised by simulate in the check's process function run here
+    # (in this process, so its message can be read): it is sent back as an error, not a crash, and
+    # the stage raises it as the check's NumericalError, one line, its log lines passed on.
+    net_cfg = TractionNet(edge_length=1.0, mesh_size=0.05, rope_diameter=4.5e-3, corner_mass=1e-3)
+    cfg = CollideConfig(net_source="flat_taut", duration=4e-3, aim_point=(0.025, 0.025), snapshots=2,
+                        fin_piece_length=4e-3, stiffness_rule="given", contact_stiffness=1.0)
+    air = isa(8000.0)
+    monkeypatch.setattr(signal, "signal", lambda *a: None)  # (the process function ignores Ctrl-C: not here)
+    monkeypatch.setenv("FLEXNET_NO_PROGRESS", "1")  # (it sets it: restored after the test)
+    monkeypatch.setattr(logging.getLogger("flexnet.collide.check"), "handlers", [])  # (it adds one)
+    recv, send = multiprocessing.Pipe(duplex=False)
+    stage._check_process(send, held_net(net_cfg, cfg.net_source, None), build_missile(MissileConfig(preset="radar")),
+                         cfg, air.gravity, air.density)
+    kind, numerical, message, lines = recv.recv()
+    assert (kind, numerical) == ("error", True) and "tunnelling" in message and "\n" not in message
+    assert any("dt =" in line for line in lines)  # the check's log came back with it
+    recv2, send2 = multiprocessing.Pipe(duplex=False)
+    send2.send((kind, numerical, message, lines))
+    check = stage._Check((), 2e-3, None, proc=object(), conn=recv2)
+    with pytest.raises(NumericalError, match="in the resolution check's impact .*tunnelling"):
+        stage._finish_check({}, check, cfg, LOG)
