@@ -47,8 +47,9 @@ def _env(tree: Path) -> dict:
 
 
 def impact(tree: Path, case: str, deploy: str, load_interval: float) -> dict:
+    # run in the tree: ``python -c`` and ``-m`` put the working directory before PYTHONPATH
     out = subprocess.run([sys.executable, "-c", INNER, case, deploy, repr(load_interval)], env=_env(tree),
-                         capture_output=True, text=True, check=True)
+                         capture_output=True, text=True, check=True, cwd=tree)
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
@@ -56,7 +57,8 @@ def stage(tree: Path, case: str) -> dict:
     with tempfile.TemporaryDirectory() as tmp:
         t0 = time.perf_counter()
         subprocess.run([sys.executable, "-m", "flexnet_fe.cli", "run", case, "--stages", "deploy,collide", "--out",
-                        str(Path(tmp) / "run")], env=_env(tree), capture_output=True, text=True, check=True)
+                        str(Path(tmp) / "run")], env=_env(tree), capture_output=True, text=True, check=True,
+                       cwd=tree)
         wall = time.perf_counter() - t0
         s = json.loads((Path(tmp) / "run" / "summary.json").read_text())["collide"]
     return {"wall_s": wall, "impact_wall_s": s["wall_s"],
@@ -73,6 +75,7 @@ def main() -> None:
     ap.add_argument("--load-intervals", nargs="+", type=float, default=[3.125e-7, 1e-5])
     ap.add_argument("--stage", action="store_true")
     args = ap.parse_args()
+    args.case, args.deploy = str(Path(args.case).resolve()), str(Path(args.deploy).resolve())
     for tree in args.trees:  # warm-up: compile each tree's kernels into its own cache
         impact(tree, args.case, args.deploy, args.load_intervals[0])
     for rep in range(args.repeat):

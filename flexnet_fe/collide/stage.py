@@ -119,10 +119,15 @@ def _check_process(conn, net, missile: Missile, cfg: CollideConfig, gravity: flo
     """The check's impact in a spawned process: sends ("ok", summary, log lines), ("error",
     numerical?, message, lines) for a FlexnetError, or ("crash", traceback, None, lines)."""
     import signal
+    import threading
     import traceback
+
+    from tqdm import tqdm
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C: the stage stops this process itself
     os.environ["FLEXNET_NO_PROGRESS"] = "1"  # one progress bar: the run's
+    tqdm.set_lock(threading.RLock())  # (tqdm's default lock is a process semaphore, left behind
+    #                                    by a terminated process: a warning at the run's exit)
     lines: list[str] = []
     log = logging.getLogger("flexnet.collide.check")
     log.propagate = False
@@ -139,6 +144,10 @@ def _check_process(conn, net, missile: Missile, cfg: CollideConfig, gravity: flo
         conn.close()
 
 
+STOP_WAIT_S = 30.0
+"""How long the stage waits for the check's process to exit by itself once its result is in [s]."""
+
+
 @dataclass
 class _Check:
     """The resolution check's impact: started beside the run's (``proc``, ``conn``) or deferred
@@ -149,10 +158,14 @@ class _Check:
     chord: float | None
     proc: object = None
     conn: object = None
+    done: bool = False
 
     def stop(self) -> None:
-        """End the check's process (after its result, or when the stage fails or is interrupted)."""
+        """End the check's process: after its result it ends by itself (waited for), when the stage
+        fails or is interrupted it is terminated."""
         if self.proc is not None:
+            if self.done:
+                self.proc.join(timeout=STOP_WAIT_S)
             if self.proc.is_alive():
                 self.proc.terminate()
             self.proc.join()
@@ -189,6 +202,7 @@ def _finish_check(summary: dict, check: _Check, cfg: CollideConfig, log: logging
     else:
         try:
             kind, a, b, lines = check.conn.recv()
+            check.done = True
         except EOFError:
             check.proc.join()
             raise NumericalError(f"collide: the resolution check's process ended without a result (exit code "

@@ -25,8 +25,13 @@ from t = 0 as before.
 
 Threads. After their operators are assembled (dolfinx, serial), the fins are independent: their
 compiled time loops (:func:`flexnet_fe.shell.kernel.advance`, ``nogil``) run in a thread pool of
-``shell.workers`` threads. Each fin's numbers do not depend on the thread count (no shared
-state; each kernel call is the serial code), so the results are those of one worker.
+``shell.workers`` threads, each as soon as its fin is set up, while this thread sets up the next
+(``run_as_ready``: the set-ups, ~45 % of radar × traction's stage, no longer wait for one
+another and the loops for all of them). dolfinx 0.5.2's bindings never release the GIL (no
+``gil_scoped_release`` in python/dolfinx/wrappers at v0.5.2), so its calls from the set-up and
+from the fins' XDMF frames cannot run at once; only the compiled loops run beside them. Each fin's
+numbers do not depend on the thread count (no shared state; each kernel call is the serial
+code), so the results are those of one worker.
 """
 
 from __future__ import annotations
@@ -34,7 +39,7 @@ from __future__ import annotations
 import math
 import threading
 from concurrent.futures import ThreadPoolExecutor
-from typing import Callable, NamedTuple, Sequence, TypeVar
+from typing import Callable, Iterable, NamedTuple, TypeVar
 
 import numpy as np
 
@@ -85,17 +90,34 @@ J = TypeVar("J")
 R = TypeVar("R")
 
 
-def run_all(jobs: Sequence[J], fn: Callable[[J], R], workers: int) -> list[R]:
-    """[fn(job) for job in jobs], on ``workers`` threads (1: in this thread, in order). The
-    results come back in the order of ``jobs``; the first exception is raised after every job
-    has ended (the others keep their outputs)."""
-    if workers <= 1 or len(jobs) <= 1:
+def run_as_ready(jobs: Iterable[J], fn: Callable[[J], R], workers: int) -> list[R]:
+    """[fn(job) for job in jobs], each job handed to a thread as soon as the iterable yields it, so
+    making the next job (in this thread) overlaps the threads' work on the earlier ones. ``workers``
+    jobs run at once, ``workers`` − 1 while jobs are still being made (the making takes a core;
+    1 worker: make, run, make, run… in this thread). The results come back in the order of
+    ``jobs``; the first exception — of making a job, then of the jobs in order — is raised after
+    every job handed out has ended (the others keep their outputs)."""
+    if workers <= 1:
         return [fn(j) for j in jobs]
-    with ThreadPoolExecutor(max_workers=min(workers, len(jobs)),
-                            thread_name_prefix="shell-fin") as pool:
-        futures = [pool.submit(fn, j) for j in jobs]
+    slots = threading.Semaphore(workers)
+    slots.acquire()  # the making's core, given back when every job is made
+
+    def run(job: J) -> R:
+        with slots:
+            return fn(job)
+
+    made_err = None
+    with ThreadPoolExecutor(max_workers=workers, thread_name_prefix="shell-fin") as pool:
+        futures = []
+        try:
+            for j in jobs:
+                futures.append(pool.submit(run, j))
+        except BaseException as err:  # (Ctrl-C too: the threads' loops end, then it is raised)
+            made_err = err
+        finally:
+            slots.release()
         errors = [f.exception() for f in futures]
-    for err in errors:
+    for err in [made_err, *errors]:
         if err is not None:
             raise err
     return [f.result() for f in futures]

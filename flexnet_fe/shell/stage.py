@@ -38,7 +38,7 @@ from flexnet_fe.shell.model import ShellModel, build_model
 from flexnet_fe.shell import hotspot
 from flexnet_fe.shell.recovery import build_recovery, locate_peak, stress_tensors, von_mises
 from flexnet_fe.shell.schedule import (AFTER_RATIO_LIMIT, IO_LOCK, FinWindow,
-                                      fin_window, run_all, window_steps)
+                                      fin_window, run_as_ready, window_steps)
 from flexnet_fe.shell.solve import ParallelSampler, RunResult, recovery_for, run
 from flexnet_fe.runs import ENVELOPE_XDMF, FIELDS_XDMF, HISTORY
 
@@ -634,8 +634,10 @@ def run_shell(shell: ShellConfig, fins: list[FinSpec], contacts_npz: Path,
     """The shell stage. Returns the ``shell`` section of summary.json: per fin name
     ``peak_von_mises_pa, peak_time_s, peak_location_m, peak_max_principal_pa`` (and more), plus
     ``dt_s`` (smallest), ``dt_crit_s`` (smallest), ``dofs`` (total), ``steps`` (total),
-    ``workers``, ``wall_s``. The fins are set up one after the other (dolfinx), then their time
-    loops run on ``shell.workers`` threads (one under MPI), then each is finished in order.
+    ``workers``, ``wall_s`` (``setup_wall_s``: until the last fin is set up; ``loops_wall_s``: from
+    then until the last loop ends). The fins are set up one after the other (dolfinx), each one's
+    time loop handed to one of ``shell.workers`` threads (one under MPI: in this thread) as soon as
+    it is set up, while the next is set up (``schedule.run_as_ready``); then each is finished in order.
     """
     t0 = time.perf_counter()
     if shell.load is not None:  # a given pressure replaces the collision loads
@@ -656,15 +658,24 @@ def run_shell(shell: ShellConfig, fins: list[FinSpec], contacts_npz: Path,
                                                            "contact modulus from; the fins have contact loads")
     end_time = _end_time(shell, contacts, acc_t)
     specs = select_fins(shell, fins, contacts)
-    jobs = [_setup_fin(shell, spec, contacts, acc_t, acc, stage_dir, end_time, log, comm)
-            for spec in specs]
-    t_setup = time.perf_counter()
-    workers = 1 if comm.size > 1 else min(shell.workers or cpu_count(), max(len(jobs), 1))
-    total = sum(j.steps.n_steps for j in jobs)
-    log.info("shell: %d fins, %d steps in all, on %d thread(s)", len(jobs), total, workers)
-    with progress_bar(total, f"shell ({len(jobs)} fins, {workers} thread(s))") as bar:
-        results = run_all(jobs, lambda j: run_fin(j, shell, bar, log), workers)
-    t_loops = time.perf_counter()
+    workers = 1 if comm.size > 1 else min(shell.workers or cpu_count(), max(len(specs), 1))
+    log.info("shell: %d fins, their loops on %d thread(s), each as soon as its fin is set up", len(specs),
+             workers)
+    jobs: list[FinJob] = []
+    t_setup = [t0]
+    with progress_bar(0, f"shell ({len(specs)} fins, {workers} thread(s))") as bar:
+        def set_up():
+            for spec in specs:
+                job = _setup_fin(shell, spec, contacts, acc_t, acc, stage_dir, end_time, log, comm)
+                jobs.append(job)
+                t_setup[0] = time.perf_counter()
+                with IO_LOCK:
+                    bar.total += job.steps.n_steps
+                    bar.refresh()
+                yield job
+
+        results = run_as_ready(set_up(), lambda j: run_fin(j, shell, bar, log), workers)
+    t_setup, t_loops = t_setup[0], time.perf_counter()
     summary: dict = {}
     warnings: list[str] = []
     for spec, job, res in zip(specs, jobs, results):

@@ -2,7 +2,7 @@
 acceleration against CPU time, over the travel-per-step fraction and the stability safety
 factor (dt at fixed contact stiffness), the rope subdivision near contact
 (``collide.rope_split``, when the schema has it), the rope pieces at the fins
-(``collide.fin_piece_length``: half and twice the shipped length), the far net's window (``collide.far_net_ratio``;
+(``collide.fin_piece_length`` and ``fin_piece_chord``: half and twice the shipped ones), the far net's window (``collide.far_net_ratio``;
 the reference steps every segment every step), the crop reach and crop on/off — through
 ``collide.simulate.simulate``, the stage's own integration."""
 
@@ -38,10 +38,16 @@ def shipped_fin_piece() -> float:
     return float(case_with(CASE, []).collide.fin_piece_length)
 
 
+def shipped_fin_chord() -> float | None:
+    """The default case's ``collide.fin_piece_chord`` [m] (None: the rope is not cut during the run)."""
+    chord = case_with(CASE, []).collide.fin_piece_chord
+    return None if chord is None else float(chord)
+
+
 def points(ctx: Context) -> list[Point]:
     quick = ctx.quick
     k = shipped_rope_split()  # quick: the scene's own k (1), not varied, not in the reference
-    piece = shipped_fin_piece()
+    piece, chord = shipped_fin_piece(), shipped_fin_chord()
     grid = {"collide.pass_through_fraction": [0.2, 0.05],
             "collide.dt_safety": [0.25],
             "collide.rope_split": sorted({max(1, k // 2), 2 * k} - {k}),
@@ -50,11 +56,14 @@ def points(ctx: Context) -> list[Point]:
             "collide.far_net_ratio": [1, 32],
             "collide.fin_piece_length": [2.0 * piece, 0.5 * piece]}
     # the reference splits the ropes twice as finely as the shipped case and cuts them at the fins to
-    # half its pieces (both read from the case file: the shipped values may change), every other knob
-    # at its finest
+    # half its pieces and half the chord where they press (as the stage's resolution check; all read
+    # from the case file: the shipped values may change), every other knob at its finest
     ref = {"collide.pass_through_fraction": 0.05 if quick else 0.025, "collide.dt_safety": 0.25,
            "collide.crop": "false", "collide.rope_split": 2 * k, "collide.far_net_ratio": 1,
            "collide.fin_piece_length": 0.5 * piece}
+    if chord is not None:
+        grid["collide.fin_piece_chord"] = [2.0 * chord, 0.5 * chord]
+        ref["collide.fin_piece_chord"] = 0.5 * chord
     if quick:
         # the 2 m flat net lies inside the crop reach (2.2 m) and dt is set by the travel per step:
         # crop reach and dt_safety change nothing here and are left to the full study. Lumped vs
@@ -63,6 +72,7 @@ def points(ctx: Context) -> list[Point]:
         grid = {"collide.pass_through_fraction": [0.2], "net.subdivisions": [2]}
         ref.pop("collide.rope_split")
         ref.pop("collide.fin_piece_length")  # the quick scene does not cut the rope at the fins
+        ref.pop("collide.fin_piece_chord", None)
         ctx.note("collide", "quick scene: ropes not split (rope_split 1) and not varied — the rope split's "
                             "convergence is the full study's (reference = 2 × the shipped case's rope_split)")
     missing = knob_exists("collide.rope_split", 2)

@@ -10,6 +10,8 @@ bitwise. The threads run the same serial kernel on separate data: bitwise as wel
 from __future__ import annotations
 
 import logging
+import threading
+import time
 from pathlib import Path
 
 import numpy as np
@@ -19,7 +21,7 @@ from flexnet_fe.io import read_history_csv
 from flexnet_fe.shell import kernel as kn
 from flexnet_fe.shell.config import FinSpec, ShellConfig
 from flexnet_fe.shell.meshio import write_plate_msh
-from flexnet_fe.shell.schedule import FinWindow, fin_window, run_all, window_steps
+from flexnet_fe.shell.schedule import FinWindow, fin_window, run_as_ready, window_steps
 from flexnet_fe.shell.stage import run_shell
 
 LOG = logging.getLogger("flexnet.test.schedule")
@@ -112,7 +114,7 @@ def test_window_arithmetic():
     assert window_steps(FinWindow(0.0, 1e-5), 1e-6, 4) == (0, 12)
 
 
-def test_run_all_keeps_order_and_raises_after_all_jobs():
+def test_run_as_ready_keeps_order_and_raises_after_all_jobs():
     done = []
 
     def fn(j):
@@ -121,10 +123,56 @@ def test_run_all_keeps_order_and_raises_after_all_jobs():
             raise ValueError("job 1")
         return 10 * j
 
-    assert run_all([0, 2, 3], fn, 2) == [0, 20, 30]
+    assert run_as_ready([0, 2, 3], fn, 2) == [0, 20, 30]
     with pytest.raises(ValueError, match="job 1"):
-        run_all([0, 1, 2, 3], fn, 2)
+        run_as_ready([0, 1, 2, 3], fn, 2)
     assert sorted(done[3:]) == [0, 1, 2, 3]
+
+
+def test_run_as_ready_starts_each_job_while_the_next_is_made():
+    # Reference: the order of events. Job 0's run must start before job 1 is made (it is handed to
+    # a thread at once and waits for nothing); while jobs are still being made, at most workers − 1
+    # run at once (the making has a core), afterwards workers; a failure in making a job is raised
+    # only after the jobs already handed out have ended, which keep their results.
+    events, started = [], threading.Event()
+
+    def jobs():
+        yield 0
+        assert started.wait(5.0)  # job 0 runs while this (the set-up) is still going
+        events.append("made 1")
+        yield 1
+        raise RuntimeError("set-up of job 2")
+
+    def fn(j):
+        if j == 0:
+            started.set()
+        time.sleep(0.05)
+        events.append(f"ran {j}")
+        return j
+
+    with pytest.raises(RuntimeError, match="set-up of job 2"):
+        run_as_ready(jobs(), fn, 2)
+    assert sorted(events) == ["made 1", "ran 0", "ran 1"]
+    assert run_as_ready(iter([5, 6]), fn, 1) == [5, 6]  # one worker: in this thread, in order
+
+    lock, now, most, making = threading.Lock(), [0], {True: 0, False: 0}, [True]
+
+    def counted(j):
+        with lock:
+            now[0] += 1
+            most[making[0]] = max(most[making[0]], now[0])
+        time.sleep(0.1)
+        with lock:
+            now[0] -= 1
+        return j
+
+    def made():
+        yield from range(6)  # more jobs than threads at once, then a long making of nothing more
+        time.sleep(0.15)
+        making[0] = False
+
+    assert run_as_ready(made(), counted, 3) == list(range(6))
+    assert most[True] == 2 and most[False] == 3  # 3 workers: 2 while making, then 3
 
 
 def test_advance_releases_the_gil():

@@ -1,0 +1,67 @@
+"""One stage's wall time under two source trees (e.g. a git worktree of the code before a change, and
+the change), alternated in one run, on copies of one finished run directory.
+
+    PYTHONPATH=. .venv/bin/python benchmarks/stage_wall.py OUT.jsonl CASE_DIR RUN_DIR --stage shell \\
+        --trees OLD_TREE NEW_TREE [--repeat 1]
+
+Each measurement copies RUN_DIR (without the stage's own folder) to a scratch folder and runs
+``flexnet run CASE_DIR --stages STAGE`` there in its own process with the tree first on PYTHONPATH.
+Row: tree, wall [s] of the process, the stage summary's ``*wall_s`` keys, and per fin (shell) the
+peak von Mises [Pa] — which must not depend on the tree when the change is one of scheduling —
+with the load average and the machine (docs/performance.md)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+
+def measure(tree: Path, case: str, run_dir: Path, stage: str) -> dict:
+    with tempfile.TemporaryDirectory() as tmp:
+        copy = Path(tmp) / "run"
+        shutil.copytree(run_dir, copy, ignore=shutil.ignore_patterns(stage, "report*", "run.lock"))
+        env = {**os.environ, "PYTHONPATH": str(tree), "FLEXNET_NO_PROGRESS": "1"}
+        t0 = time.perf_counter()
+        # (in the tree: ``python -m`` puts the working directory before PYTHONPATH)
+        subprocess.run([sys.executable, "-m", "flexnet_fe.cli", "run", str(Path(case).resolve()), "--stages", stage,
+                        "--out", str(copy)], env=env, capture_output=True, text=True, check=True, cwd=tree)
+        wall = time.perf_counter() - t0
+        s = json.loads((copy / "summary.json").read_text())[stage]
+    row = {"wall_s": wall, **{k: v for k, v in s.items() if k.endswith("wall_s")}}
+    if stage == "shell":
+        row["peaks_pa"] = {k: v["peak_von_mises_pa"] for k, v in s.items()
+                           if isinstance(v, dict) and "peak_von_mises_pa" in v}
+    return row
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("out")
+    ap.add_argument("case")
+    ap.add_argument("run_dir", type=Path)
+    ap.add_argument("--stage", required=True)
+    ap.add_argument("--trees", nargs=2, required=True, type=Path)
+    ap.add_argument("--repeat", type=int, default=1)
+    args = ap.parse_args()
+    args.run_dir = args.run_dir.resolve()
+    for rep in range(args.repeat):
+        for tree in args.trees:
+            load = os.getloadavg()[0]
+            row = {"stage": args.stage, "tree": str(tree), "repeat": rep,
+                   **measure(tree, args.case, args.run_dir, args.stage), "load_1min": load,
+                   "machine": f"{platform.node()} {os.cpu_count()} cores", "date": time.strftime("%Y-%m-%d %H:%M")}
+            with open(args.out, "a") as fh:
+                fh.write(json.dumps(row) + "\n")
+            print(json.dumps(row), flush=True)
+
+
+if __name__ == "__main__":
+    main()
