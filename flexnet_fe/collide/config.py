@@ -100,8 +100,9 @@ class CollideConfig(Section):
     resolution_check: bool = Field(False, description=(
         "also run the impact with fin_piece_length (and fin_piece_chord, when set) halved and report how far each headline moves "
         "(summary resolution_check: Δv, CFC peak, impulse, contact duration, per-fin impulse); a "
-        "move beyond resolution_tolerance is a warning (collide.resolution). Costs about 2.5x the "
-        "collision"))
+        "move beyond resolution_tolerance is a warning (collide.resolution). Costs a second impact "
+        "at half the pieces (about 2x the first's CPU), run in a second process beside the first on two "
+        "cores or more (collide.stage.check_beside)"))
     resolution_tolerance: Positive = Field(0.02, description=(
         "largest relative move of a headline under resolution_check that is not flagged [-]"))
     allow_tunnelling: bool = Field(False, description=(
