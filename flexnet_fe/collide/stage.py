@@ -97,11 +97,15 @@ def check_config(cfg: CollideConfig) -> CollideConfig:
 
 def check_beside() -> bool:
     """Run the resolution check's impact in a second process beside the run's own: when this
-    process may use two cores or more and is not a rank of an mpirun job (whose cores the launcher
+    process may use two cores or more, is not a rank of an mpirun job (whose cores the launcher
     has shared out; a plain run that initialised MPI for itself, as importing dolfinx does, may
-    start a process). Otherwise it runs after the run's impact, in this process. Both ways give the
-    same summary (the impacts are deterministic and share nothing; tests/collide/test_resolution.py)."""
-    return cpu_count() >= 2 and not launched_by_mpirun()
+    start a process) and is not a daemonic process (a ``flexnet sweep -j N`` worker: it may not
+    start processes, and the sweep has shared the cores out already). Otherwise it runs after the
+    run's impact, in this process. Both ways give the same summary (the impacts are deterministic and
+    share nothing; tests/collide/test_resolution.py)."""
+    import multiprocessing
+
+    return cpu_count() >= 2 and not launched_by_mpirun() and not multiprocessing.current_process().daemon
 
 
 class _LogLines(logging.Handler):

@@ -114,3 +114,12 @@ def test_the_check_process_error_reaches_the_stage_as_one_line(monkeypatch):
     check = stage._Check((), 2e-3, None, proc=object(), conn=recv2)
     with pytest.raises(NumericalError, match="in the resolution check's impact .*tunnelling"):
         stage._finish_check({}, check, cfg, LOG)
+
+
+def test_a_sweep_worker_runs_the_check_in_its_own_process():
+    # Reference: multiprocessing's rule — a daemonic process (a pool worker of ``flexnet sweep -j N``)
+    # may not start processes (Process.start asserts it). In such a worker the check must run after
+    # the impact, in the worker; in this (non-daemonic) process on two cores it may run beside.
+    with multiprocessing.get_context("spawn").Pool(1) as pool:
+        assert pool.apply(stage.check_beside) is False
+    assert stage.check_beside() is (stage.cpu_count() >= 2 and not stage.launched_by_mpirun())
