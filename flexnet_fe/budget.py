@@ -164,7 +164,7 @@ def collide_cost(case, file) -> StageCost:
     and ≈ 40 history columns per output row; disk: snapshots (60 B per node) × snapshots. With
     ``resolution_check`` the steps add the second impact's, at half the pieces, and the memory is
     counted twice (it runs in a second process beside the first on two cores or more:
-    ``collide.stage.check_beside``)."""
+    ``collide.check.check_beside``)."""
     cc, net = case.collide, case.net
     nodes, segs, l0, c = check_net(net, file)
     energy = 0.5 * _missile_mass(case.missile) * cc.impact_speed * cc.impact_speed

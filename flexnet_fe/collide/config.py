@@ -102,7 +102,7 @@ class CollideConfig(Section):
         "(summary resolution_check: Δv, CFC peak, impulse, contact duration, per-fin impulse); a "
         "move beyond resolution_tolerance is a warning (collide.resolution). Costs a second impact "
         "at half the pieces (about 2x the first's CPU), run in a second process beside the first on two "
-        "cores or more (collide.stage.check_beside)"))
+        "cores or more (collide.check.check_beside)"))
     resolution_tolerance: Positive = Field(0.02, description=(
         "largest relative move of a headline under resolution_check that is not flagged [-]"))
     allow_tunnelling: bool = Field(False, description=(

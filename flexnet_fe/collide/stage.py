@@ -23,19 +23,15 @@ Files written
 from __future__ import annotations
 
 import logging
-import os
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from flexnet_fe.atmosphere import Air
 from flexnet_fe.collide.config import CollideConfig
-from flexnet_fe.collide.resolution import resolution_moves
+from flexnet_fe.collide.check import finish_check, start_check
 from flexnet_fe.collide.scene import held_net
 from flexnet_fe.collide.simulate import CollisionResult, simulate
-from flexnet_fe.errors import FlexnetError, NumericalError
-from flexnet_fe.machine import cpu_count, launched_by_mpirun
 from flexnet_fe.io import write_history_csv
 from flexnet_fe.missile.config import MissileConfig
 from flexnet_fe.missile.geometry import Missile
@@ -60,11 +56,11 @@ def run_collide(net_cfg, deploy_cfg, missile_cfg: MissileConfig, collide_cfg: Co
     log.info("collide: %s net (%s, %d nodes), %s missile (%.1f kg), %.0f m/s, incidence %.3g rad, "
              "aim (%.3g, %.3g) m", net.model.kind, net.source.value, net.model.n_nodes, missile.name,
              missile.mass, collide_cfg.impact_speed, collide_cfg.incidence_angle, *collide_cfg.aim_point)
-    check = _start_check(net, missile, collide_cfg, air, log) if collide_cfg.resolution_check else None
+    check = start_check(net, missile, collide_cfg, air, log) if collide_cfg.resolution_check else None
     try:
         res = simulate(net, missile, collide_cfg, air.gravity, log, air_density=air.density)
         if check is not None:
-            _finish_check(res.summary, check, collide_cfg, log)
+            finish_check(res.summary, check, collide_cfg, log)
     finally:
         if check is not None:
             check.stop()
@@ -83,151 +79,6 @@ def run_collide(net_cfg, deploy_cfg, missile_cfg: MissileConfig, collide_cfg: Co
              s["max_penetration_m"], s["momentum_error_rel"], s["energy_error_rel"], s["broken_segments"], s["steps"], s["dt_s"],
              s["wall_s"])
     return s
-
-
-def check_config(cfg: CollideConfig) -> CollideConfig:
-    """The resolution check's impact (``[collide] resolution_check``): the rope pieces at the fins
-    halved (``fin_piece_length`` and, when set, ``fin_piece_chord``; ``collide.resolution``), its
-    fin loads sampled at the output interval (its headlines — Δv, the CFC peak, the fin impulses —
-    do not depend on how finely the fin loads are sampled)."""
-    return cfg.model_copy(update={"fin_piece_length": 0.5 * cfg.fin_piece_length,
-                                  "fin_piece_chord": None if cfg.fin_piece_chord is None else 0.5 * cfg.fin_piece_chord,
-                                  "resolution_check": False, "load_interval": None})
-
-
-def check_beside() -> bool:
-    """Run the resolution check's impact in a second process beside the run's own: when this
-    process may use two cores or more, is not a rank of an mpirun job (whose cores the launcher
-    has shared out; a plain run that initialised MPI for itself, as importing dolfinx does, may
-    start a process) and is not a daemonic process (a ``flexnet sweep -j N`` worker: it may not
-    start processes, and the sweep has shared the cores out already). Otherwise it runs after the
-    run's impact, in this process. Both ways give the same summary (the impacts are deterministic and
-    share nothing; tests/collide/test_resolution.py)."""
-    import multiprocessing
-
-    return cpu_count() >= 2 and not launched_by_mpirun() and not multiprocessing.current_process().daemon
-
-
-class _LogLines(logging.Handler):
-    """Keeps the formatted records (the check's log, sent back to the stage's)."""
-
-    def __init__(self, lines: list[str]):
-        super().__init__(logging.INFO)
-        self.lines = lines
-
-    def emit(self, record: logging.LogRecord) -> None:
-        self.lines.append(record.getMessage())
-
-
-def _check_process(conn, net, missile: Missile, cfg: CollideConfig, gravity: float, density: float) -> None:
-    """The check's impact in a spawned process: sends ("ok", summary, log lines), ("error",
-    numerical?, message, lines) for a FlexnetError, or ("crash", traceback, None, lines)."""
-    import signal
-    import threading
-    import traceback
-
-    from tqdm import tqdm
-
-    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C: the stage stops this process itself
-    os.environ["FLEXNET_NO_PROGRESS"] = "1"  # one progress bar: the run's
-    tqdm.set_lock(threading.RLock())  # (tqdm's default lock is a process semaphore, left behind
-    #                                    by a terminated process: a warning at the run's exit)
-    lines: list[str] = []
-    log = logging.getLogger("flexnet.collide.check")
-    log.propagate = False
-    log.setLevel(logging.INFO)
-    log.addHandler(_LogLines(lines))
-    try:
-        summary = simulate(net, missile, cfg, gravity, log, air_density=density, n_snapshots=2).summary
-        conn.send(("ok", summary, None, lines))
-    except FlexnetError as err:
-        conn.send(("error", isinstance(err, NumericalError), str(err), lines))
-    except BaseException:  # a bug: its traceback goes to the stage, which raises it
-        conn.send(("crash", traceback.format_exc(), None, lines))
-    finally:
-        conn.close()
-
-
-STOP_WAIT_S = 30.0
-"""How long the stage waits for the check's process to exit by itself once its result is in [s]."""
-
-
-@dataclass
-class _Check:
-    """The resolution check's impact: started beside the run's (``proc``, ``conn``) or deferred
-    (``args``: run by ``_finish_check`` in this process)."""
-
-    args: tuple
-    piece: float
-    chord: float | None
-    proc: object = None
-    conn: object = None
-    done: bool = False
-
-    def stop(self) -> None:
-        """End the check's process: after its result it ends by itself (waited for), when the stage
-        fails or is interrupted it is terminated."""
-        if self.proc is not None:
-            if self.done:
-                self.proc.join(timeout=STOP_WAIT_S)
-            if self.proc.is_alive():
-                self.proc.terminate()
-            self.proc.join()
-            self.conn.close()
-            self.proc = None
-
-
-def _start_check(net, missile: Missile, cfg: CollideConfig, air: Air, log: logging.Logger) -> _Check:
-    fine = check_config(cfg)
-    args = (net, missile, fine, air.gravity, air.density)
-    check = _Check(args, fine.fin_piece_length, fine.fin_piece_chord)
-    beside = check_beside()
-    where = "beside the impact (a second process)" if beside else "after the impact"
-    log.info("collide: resolution check: the impact again with rope pieces of %.3g mm at the fins%s, %s",
-             1e3 * check.piece, "" if check.chord is None else f", cut to chords of {1e3 * check.chord:.3g} mm "
-             "where they press", where)
-    if beside:
-        import multiprocessing
-
-        ctx = multiprocessing.get_context("spawn")
-        check.conn, send = ctx.Pipe(duplex=False)
-        check.proc = ctx.Process(target=_check_process, args=(send, *args), daemon=True,
-                                 name="flexnet-resolution-check")
-        check.proc.start()
-        send.close()
-    return check
-
-
-def _finish_check(summary: dict, check: _Check, cfg: CollideConfig, log: logging.Logger) -> None:
-    """Wait for (or run) the check's impact; add ``summary['resolution_check']`` and its warnings."""
-    if check.proc is None:
-        net, missile, fine_cfg, gravity, density = check.args
-        fine = simulate(net, missile, fine_cfg, gravity, log, air_density=density, n_snapshots=2).summary
-    else:
-        try:
-            kind, a, b, lines = check.conn.recv()
-            check.done = True
-        except EOFError:
-            check.proc.join()
-            raise NumericalError(f"collide: the resolution check's process ended without a result (exit code "
-                                 f"{check.proc.exitcode}; out of memory?); collide.resolution_check = false skips "
-                                 "the check") from None
-        for line in lines:
-            log.info("collide (resolution check): %s", line.removeprefix("collide: "))
-        if kind == "error":
-            raise (NumericalError if a else FlexnetError)(f"collide: in the resolution check's impact (rope pieces "
-                                                          f"halved at the fins): {b.removeprefix('collide: ')}")
-        if kind == "crash":
-            raise RuntimeError(f"the resolution check's process failed:\n{a}")
-        fine = a
-    section, warnings = resolution_moves(summary, fine, check.piece, cfg.resolution_tolerance, check.chord)
-    section["fin_piece_chord_m"] = check.chord
-    section["wall_s"] = fine["wall_s"]
-    summary["resolution_check"] = section
-    summary["warnings"].extend(warnings)
-    log.info("collide: resolution check (%.3g mm): Δv/v %+.2f %%, CFC peak %+.2f %%, impulse %+.2f %%; flagged: %s",
-             1e3 * check.piece, 100 * section["dv_over_v_move_rel"], 100 * section["peak_accel_move_rel"],
-             100 * section["impulse_move_rel"], ", ".join(section["flagged"]) or "none")
 
 
 def write_outputs(res: CollisionResult, springs: np.ndarray, rest: np.ndarray, k: np.ndarray,

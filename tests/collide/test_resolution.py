@@ -15,7 +15,7 @@ from flexnet_fe.collide.resolution import resolution_moves
 from flexnet_fe.collide.scene import held_net
 from flexnet_fe.collide.simulate import simulate
 from flexnet_fe.errors import NumericalError
-from flexnet_fe.collide import stage
+from flexnet_fe.collide import check
 from flexnet_fe.collide.stage import run_collide
 from flexnet_fe.missile.build import build_missile
 from flexnet_fe.missile.config import MissileConfig
@@ -58,7 +58,7 @@ def test_stage_reports_the_moves_of_the_two_runs(tmp_path, monkeypatch, beside):
     # cut at the start and the chord they are cut to where they press (simulate is deterministic):
     # the stage's moves are exactly those of the two summaries, whether the check's impact ran in a
     # second process beside the run's (two cores) or after it in this one.
-    monkeypatch.setattr(stage, "check_beside", lambda: beside)
+    monkeypatch.setattr(check, "check_beside", lambda: beside)
     net_cfg = TractionNet(edge_length=1.0, mesh_size=0.05, rope_diameter=4.5e-3, corner_mass=1e-3,
                           transverse_modulus=1e11)
     cfg = CollideConfig(net_source="flat_taut", duration=4e-3, aim_point=(0.025, 0.025), snapshots=2,
@@ -104,16 +104,16 @@ def test_the_check_process_error_reaches_the_stage_as_one_line(monkeypatch):
     monkeypatch.setenv("FLEXNET_NO_PROGRESS", "1")  # (it sets it: restored after the test)
     monkeypatch.setattr(logging.getLogger("flexnet.collide.check"), "handlers", [])  # (it adds one)
     recv, send = multiprocessing.Pipe(duplex=False)
-    stage._check_process(send, held_net(net_cfg, cfg.net_source, None), build_missile(MissileConfig(preset="radar")),
+    check._check_process(send, held_net(net_cfg, cfg.net_source, None), build_missile(MissileConfig(preset="radar")),
                          cfg, air.gravity, air.density)
     kind, numerical, message, lines = recv.recv()
     assert (kind, numerical) == ("error", True) and "tunnelling" in message and "\n" not in message
     assert any("dt =" in line for line in lines)  # the check's log came back with it
     recv2, send2 = multiprocessing.Pipe(duplex=False)
     send2.send((kind, numerical, message, lines))
-    check = stage._Check((), 2e-3, None, proc=object(), conn=recv2)
+    job = check._Check((), 2e-3, None, proc=object(), conn=recv2)
     with pytest.raises(NumericalError, match="in the resolution check's impact .*tunnelling"):
-        stage._finish_check({}, check, cfg, LOG)
+        check.finish_check({}, job, cfg, LOG)
 
 
 def test_a_sweep_worker_runs_the_check_in_its_own_process():
@@ -121,5 +121,5 @@ def test_a_sweep_worker_runs_the_check_in_its_own_process():
     # may not start processes (Process.start asserts it). In such a worker the check must run after
     # the impact, in the worker; in this (non-daemonic) process on two cores it may run beside.
     with multiprocessing.get_context("spawn").Pool(1) as pool:
-        assert pool.apply(stage.check_beside) is False
-    assert stage.check_beside() is (stage.cpu_count() >= 2 and not stage.launched_by_mpirun())
+        assert pool.apply(check.check_beside) is False
+    assert check.check_beside() is (check.cpu_count() >= 2 and not check.launched_by_mpirun())
