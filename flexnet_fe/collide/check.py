@@ -33,13 +33,30 @@ def check_beside() -> bool:
     """Run the resolution check's impact in a second process beside the run's own: when this
     process may use two cores or more, is not a rank of an mpirun job (whose cores the launcher
     has shared out; a plain run that initialised MPI for itself, as importing dolfinx does, may
-    start a process) and is not a daemonic process (a ``flexnet sweep -j N`` worker: it may not
-    start processes, and the sweep has shared the cores out already). Otherwise it runs after the
-    run's impact, in this process. Both ways give the same summary (the impacts are deterministic and
-    share nothing; tests/collide/test_resolution.py)."""
+    start a process), is not a daemonic process (a ``flexnet sweep -j N`` worker: it may not
+    start processes, and the sweep has shared the cores out already) and its main module is safe to
+    import again (``_main_reimport_safe``). Otherwise it runs after the run's impact, in this
+    process. Both ways give the same summary (the impacts are deterministic and share nothing;
+    tests/collide/test_resolution.py)."""
     import multiprocessing
 
-    return cpu_count() >= 2 and not launched_by_mpirun() and not multiprocessing.current_process().daemon
+    return (cpu_count() >= 2 and not launched_by_mpirun() and not multiprocessing.current_process().daemon
+            and _main_reimport_safe())
+
+
+def _main_reimport_safe() -> bool:
+    """A spawned process imports the parent's ``__main__`` again: a module run with ``-m`` (pytest,
+    ``python -m flexnet_fe.cli``) by name, a script by path, running its top level. The ``flexnet``
+    entry point guards its call; a user's script may not (``cli.main([...])`` at its top level would
+    run the case again in the child). So: a main module with a name, or the ``flexnet`` script."""
+    import sys
+    from pathlib import Path
+
+    main = sys.modules.get("__main__")
+    if main is None or getattr(main, "__spec__", None) is not None:
+        return True
+    path = getattr(main, "__file__", None)
+    return path is None or Path(path).name == "flexnet"
 
 
 class _LogLines(logging.Handler):

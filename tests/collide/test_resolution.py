@@ -123,3 +123,22 @@ def test_a_sweep_worker_runs_the_check_in_its_own_process():
     with multiprocessing.get_context("spawn").Pool(1) as pool:
         assert pool.apply(check.check_beside) is False
     assert check.check_beside() is (check.cpu_count() >= 2 and not check.launched_by_mpirun())
+
+
+def test_the_check_stays_in_a_script_whose_top_level_would_run_again(monkeypatch):
+    # Reference: multiprocessing's spawn rule — the child imports the parent's __main__ again, by name
+    # when it was run with -m, else by path, running a script's top level. A user's script that calls
+    # cli.main at its top level would run the case again in the child: the check runs after the impact
+    # there. The flexnet entry point (a guarded script) and -m modules may start the process.
+    import sys
+    import types
+
+    script = types.ModuleType("__main__")
+    script.__spec__, script.__file__ = None, "/home/user/my_study.py"
+    monkeypatch.setitem(sys.modules, "__main__", script)
+    assert check._main_reimport_safe() is False and check.check_beside() is False
+    script.__file__ = "/work/venv/bin/flexnet"
+    assert check._main_reimport_safe() is True
+    script.__spec__ = types.SimpleNamespace(name="pytest")
+    script.__file__ = "/home/user/my_study.py"
+    assert check._main_reimport_safe() is True
