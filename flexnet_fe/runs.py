@@ -40,6 +40,7 @@ import os
 import shutil
 import signal
 import socket
+import sys
 import threading
 import time
 from contextlib import contextmanager
@@ -245,10 +246,13 @@ def signal_handlers():
         _SIG.depth -= 1
         for s, h in old.items():
             signal.signal(s, h if h is not None else signal.SIG_DFL)
-        if _SIG.depth == 0:
-            lost = _SIG.pending if not _SIG.handled else None
+        if _SIG.depth == 0:  # an Interrupted leaving the block is not lost: the caller's except handles it
+            leaving = isinstance(sys.exc_info()[1], KeyboardInterrupt)
+            lost = _SIG.pending if not (_SIG.handled or leaving) else None
             _SIG.pending, _SIG.handled, _SIG.redeliver = None, False, None
             if lost is not None:  # the Interrupted was swallowed and the block ended: not lost
+                print(f"flexnet: signal {signal.Signals(lost).name} arrived where it could not be handled; "
+                      "ending with it", file=sys.stderr, flush=True)
                 os.kill(os.getpid(), lost)
 
 

@@ -70,9 +70,26 @@ class _LogLines(logging.Handler):
         self.lines.append(record.getMessage())
 
 
-def _check_process(conn, net, missile: Missile, cfg: CollideConfig, gravity: float, density: float) -> None:
-    """The check's impact in a spawned process: sends ("ok", summary, None, log lines), ("error",
-    numerical?, message, lines) for a FlexnetError, or ("crash", traceback, None, lines)."""
+PARENT_POLL_S = 0.5
+"""How often the check's process looks whether the stage's process is still there [s]."""
+
+
+def _exit_with(parent: int) -> None:
+    """End this process once ``parent`` (the stage's process) is gone: a parent killed outright
+    (SIGKILL, or a signal it could not handle) runs no clean-up, and the check would run on for
+    minutes, holding a core and the parent's stderr (a caller reading it to its end would wait)."""
+    import time
+
+    while os.getppid() == parent:
+        time.sleep(PARENT_POLL_S)
+    os._exit(1)
+
+
+def _check_process(conn, parent: int, net, missile: Missile, cfg: CollideConfig, gravity: float,
+                   density: float) -> None:
+    """The check's impact in a spawned process of ``parent``: sends ("ok", summary, None, log
+    lines), ("error", numerical?, message, lines) for a FlexnetError, or ("crash", traceback, None,
+    lines); ends itself when ``parent`` is gone (``_exit_with``)."""
     import signal
     import threading
     import traceback
@@ -80,6 +97,7 @@ def _check_process(conn, net, missile: Missile, cfg: CollideConfig, gravity: flo
     from tqdm import tqdm
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C: the stage stops this process itself
+    threading.Thread(target=_exit_with, args=(parent,), daemon=True, name="exit-with-parent").start()
     os.environ["FLEXNET_NO_PROGRESS"] = "1"  # one progress bar: the run's
     tqdm.set_lock(threading.RLock())  # (tqdm's default lock is a process semaphore, left behind
     #                                    by a terminated process: a warning at the run's exit)
@@ -143,7 +161,7 @@ def start_check(net, missile: Missile, cfg: CollideConfig, air: Air, log: loggin
 
         ctx = multiprocessing.get_context("spawn")
         check.conn, send = ctx.Pipe(duplex=False)
-        check.proc = ctx.Process(target=_check_process, args=(send, *args), daemon=True,
+        check.proc = ctx.Process(target=_check_process, args=(send, os.getpid(), *args), daemon=True,
                                  name="flexnet-resolution-check")
         check.proc.start()
         send.close()

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import logging
 import multiprocessing
+import os
 import signal
 
 import pytest
@@ -103,8 +104,9 @@ def test_the_check_process_error_reaches_the_stage_as_one_line(monkeypatch):
     monkeypatch.setattr(signal, "signal", lambda *a: None)  # (the process function ignores Ctrl-C: not here)
     monkeypatch.setenv("FLEXNET_NO_PROGRESS", "1")  # (it sets it: restored after the test)
     monkeypatch.setattr(logging.getLogger("flexnet.collide.check"), "handlers", [])  # (it adds one)
+    monkeypatch.setattr(check, "_exit_with", lambda parent: None)  # (it watches its parent: this process's)
     recv, send = multiprocessing.Pipe(duplex=False)
-    check._check_process(send, held_net(net_cfg, cfg.net_source, None), build_missile(MissileConfig(preset="radar")),
+    check._check_process(send, os.getppid(), held_net(net_cfg, cfg.net_source, None), build_missile(MissileConfig(preset="radar")),
                          cfg, air.gravity, air.density)
     kind, numerical, message, lines = recv.recv()
     assert (kind, numerical) == ("error", True) and "tunnelling" in message and "\n" not in message
@@ -142,3 +144,61 @@ def test_the_check_stays_in_a_script_whose_top_level_would_run_again(monkeypatch
     script.__spec__ = types.SimpleNamespace(name="pytest")
     script.__file__ = "/home/user/my_study.py"
     assert check._main_reimport_safe() is True
+
+
+_KILLED_PARENT = """
+import logging, os, signal, time
+from flexnet_fe.atmosphere import isa
+from flexnet_fe.collide import check
+from flexnet_fe.collide.config import CollideConfig
+from flexnet_fe.collide.scene import held_net
+from flexnet_fe.missile.build import build_missile
+from flexnet_fe.missile.config import MissileConfig
+from flexnet_fe.net.config import TractionNet
+
+check.check_beside = lambda: True
+net_cfg = TractionNet(edge_length=1.0, mesh_size=0.05, rope_diameter=4.5e-3, corner_mass=1e-3)
+cfg = CollideConfig(net_source="flat_taut", duration=0.5, aim_point=(0.025, 0.025), snapshots=2,
+                    fin_piece_length=4e-3, resolution_check=True, impact_speed=5.0)
+job = check.start_check(held_net(net_cfg, cfg.net_source, None), build_missile(MissileConfig(preset="radar")),
+                        cfg, isa(8000.0), logging.getLogger("test"))
+print(job.proc.pid, flush=True)
+time.sleep(float(os.environ["KILL_AFTER_S"]))
+os.kill(os.getpid(), signal.SIGKILL)
+"""
+
+
+def _gone(pid: int) -> bool:
+    try:
+        with open(f"/proc/{pid}/status") as f:
+            return any(line.startswith("State:") and "Z" in line for line in f)
+    except FileNotFoundError:
+        return True
+
+
+@pytest.mark.parametrize("kill_after_s", [0.0, 4.0])
+def test_the_check_process_ends_when_the_stage_process_is_killed(kill_after_s):
+    # Reference: the kernel's rule that an orphan is re-parented (its getppid changes). A stage's
+    # process killed outright (SIGKILL: no clean-up runs) while its check's impact is starting up
+    # (0 s) or running (4 s): the check's process ends within a few of its parent polls instead of
+    # running its impact on (this slow 5 m/s impact runs well past the 15 s waited: without the
+    # watch both cases failed; at 20 m/s it ran 10–30 s).
+    import subprocess
+    import sys
+    import time
+    from pathlib import Path
+
+    # (the child holds the parent's stdout and stderr: read the one line, then wait for the parent)
+    proc = subprocess.Popen([sys.executable, "-c", _KILLED_PARENT], stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
+                            text=True, cwd=Path(__file__).resolve().parents[2],
+                            env=dict(os.environ, KILL_AFTER_S=str(kill_after_s), FLEXNET_NO_PROGRESS="1"))
+    child = int(proc.stdout.readline())
+    assert proc.wait(timeout=120) == -signal.SIGKILL
+    proc.stdout.close()
+    end = time.monotonic() + 15.0  # its imports (≈ 2 s, more under load), then a poll of 0.5 s
+    while not _gone(child) and time.monotonic() < end:
+        time.sleep(0.1)
+    gone = _gone(child)
+    if not gone:
+        os.kill(child, signal.SIGKILL)
+    assert gone
