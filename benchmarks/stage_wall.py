@@ -6,7 +6,7 @@ the change), alternated in one run, on copies of one finished run directory.
 
 Each measurement copies RUN_DIR (without the stage's own folder) to a scratch folder and runs
 ``flexnet run CASE_DIR --stages STAGE`` there in its own process with the tree first on PYTHONPATH.
-Row: tree, wall [s] of the process, the stage summary's ``*wall_s`` keys, and per fin (shell) the
+Row: tree, wall [s] and peak resident memory [GiB] of the process, the stage summary's ``*wall_s`` keys, and per fin (shell) the
 peak von Mises [Pa] — which must not depend on the tree when the change is one of scheduling —
 with the load average and the machine (docs/performance.md)."""
 
@@ -31,11 +31,14 @@ def measure(tree: Path, case: str, run_dir: Path, stage: str) -> dict:
         env = {**os.environ, "PYTHONPATH": str(tree), "FLEXNET_NO_PROGRESS": "1"}
         t0 = time.perf_counter()
         # (in the tree: ``python -m`` puts the working directory before PYTHONPATH)
-        subprocess.run([sys.executable, "-m", "flexnet_fe.cli", "run", str(Path(case).resolve()), "--stages", stage,
-                        "--out", str(copy)], env=env, capture_output=True, text=True, check=True, cwd=tree)
+        rss = Path(tmp) / "max_rss_kb"  # the process's peak resident memory (GNU time, its threads included)
+        subprocess.run(["/usr/bin/time", "-f", "%M", "-o", str(rss), sys.executable, "-m", "flexnet_fe.cli", "run",
+                        str(Path(case).resolve()), "--stages", stage, "--out", str(copy)],
+                       env=env, capture_output=True, text=True, check=True, cwd=tree)
         wall = time.perf_counter() - t0
         s = json.loads((copy / "summary.json").read_text())[stage]
-    row = {"wall_s": wall, **{k: v for k, v in s.items() if k.endswith("wall_s")}}
+        max_rss_gb = int(rss.read_text().split()[-1]) / 1024 ** 2
+    row = {"wall_s": wall, "max_rss_gb": max_rss_gb, **{k: v for k, v in s.items() if k.endswith("wall_s")}}
     if stage == "shell":
         row["peaks_pa"] = {k: v["peak_von_mises_pa"] for k, v in s.items()
                            if isinstance(v, dict) and "peak_von_mises_pa" in v}

@@ -105,3 +105,110 @@ def test_inertial_load_is_minus_mass_times_acceleration():
     # the fin (linear interpolation in time between samples).
     np.testing.assert_allclose(f[:, :3].sum(0), -free_mass * a, rtol=1e-12)
     assert np.all(f[:, 3:] == 0.0)
+
+
+def _skewed_plate():
+    """A 0.3 × 0.2 m plate of 12 × 9 cells, its interior nodes moved off the grid (general
+    bilinear cells), and its FinGeometry."""
+    m = build_model(plate_mesh(12, 9, 0.3, 0.2, origin=ORIGIN, a1=A1, a2=A2), MAT, 1.0)
+    fg = _geom(m)
+    x = fg.mesh.geometry.x
+    s = np.column_stack([(x - ORIGIN) @ A1, (x - ORIGIN) @ A2])
+    inner = (s[:, 0] > 1e-9) & (s[:, 0] < 0.3 - 1e-9) & (s[:, 1] > 1e-9) & (s[:, 1] < 0.2 - 1e-9)
+    rng = np.random.default_rng(3)
+    shift = rng.uniform(-0.3, 0.3, (inner.sum(), 2)) * [0.3 / 12, 0.2 / 9]
+    x[inner] += shift[:, :1] * A1 + shift[:, 1:] * A2
+    return m, fg
+
+
+def test_the_cell_grid_locates_points_as_the_bounding_box_tree_does():
+    # Reference: dolfinx's own point location (bounding-box tree + exact cell collision, the
+    # second model; the transfer used the tree before) on general bilinear cells: the same points
+    # are found, the cell found is one dolfinx says contains the point, and the bilinear map at the
+    # reference coordinates returns the point (to the Newton solve's round-off).
+    from dolfinx import geometry
+
+    from flexnet_fe.shell.recovery import shape_q1
+    from flexnet_fe.shell.transfer import _in_plane, _locate, cell_grid
+
+    m, fg = _skewed_plate()
+    rng = np.random.default_rng(5)
+    s = rng.uniform([-0.02, -0.02], [0.32, 0.22], (4000, 2))
+    pts = ORIGIN + s[:, :1] * A1 + s[:, 1:] * A2
+    cell, X, mine, found = _locate(fg, cell_grid(fg), _in_plane(fg, pts))
+    mesh = fg.mesh
+    tree = geometry.BoundingBoxTree(mesh, 2)
+    hits = geometry.compute_colliding_cells(mesh, geometry.compute_collisions(tree, pts), pts)
+    for p in range(len(pts)):
+        inside = len(hits.links(p)) > 0
+        assert found[p] == inside, (p, s[p])
+        if inside:
+            assert cell[p] in hits.links(p)
+            xc = mesh.geometry.x[mesh.geometry.dofmap.links(cell[p])]
+            back = shape_q1(X[p:p + 1, 0], X[p:p + 1, 1]) @ xc
+            np.testing.assert_allclose(back[0], pts[p], atol=1e-12)
+    assert 0.6 < found.mean() < 0.9  # both inside and outside points were asked (area share 0.74)
+
+
+def test_nearest_boundary_point_is_the_brute_force_one():
+    # Reference: every boundary segment tried for every point (the kernel before its grid), with
+    # the lowest-numbered segment on a tie — points on the outline's vertices included.
+    from flexnet_fe.shell.transfer import _boundary_segments, _nearest_on_boundary
+
+    _, fg = _skewed_plate()
+    segs = _boundary_segments(fg)
+    rng = np.random.default_rng(11)
+    y = np.concatenate([rng.uniform([-0.05, -0.05], [0.35, 0.25], (3000, 2)), segs[:, 0], segs[:, 1]])
+    near, dist, tdir = _nearest_on_boundary(segs, y)
+    d = segs[:, 1] - segs[:, 0]
+    L2 = np.maximum((d ** 2).sum(1), 1e-300)
+    for i, p in enumerate(y):
+        t = np.clip(((p[0] - segs[:, 0, 0]) * d[:, 0] + (p[1] - segs[:, 0, 1]) * d[:, 1]) / L2, 0.0, 1.0)
+        q = segs[:, 0] + t[:, None] * d
+        d2 = (q[:, 0] - p[0]) ** 2 + (q[:, 1] - p[1]) ** 2
+        k = int(np.argmin(d2))  # the first minimum
+        np.testing.assert_allclose(dist[i], np.sqrt(d2[k]), rtol=0, atol=1e-15)
+        np.testing.assert_allclose(near[i], q[k], rtol=0, atol=1e-15)
+        np.testing.assert_allclose(tdir[i], d[k] / np.sqrt(L2[k]), rtol=0, atol=1e-15)
+
+
+def test_a_disk_left_out_would_not_have_fitted():
+    # Reference: the disk stencil located point by point. _disk_may_fit may only leave out events
+    # whose disk has a point off the fin (it saves locating them); centres on the outline (edge
+    # contacts), near it and inside are asked, and inside ones must be tried.
+    from flexnet_fe.shell.transfer import (_boundary_segments, _disk_may_fit, _in_plane, _locate, cell_grid,
+                                           disk_stencil)
+
+    _, fg = _skewed_plate()
+    segs = _boundary_segments(fg)
+    grid = cell_grid(fg)
+    rng = np.random.default_rng(13)
+    inside = rng.uniform([0.0, 0.0], [0.3, 0.2], (2000, 2))
+    on_edge = np.column_stack([rng.uniform(0, 0.3, 300), np.zeros(300)])
+    s = np.concatenate([inside, on_edge, [[0.0, 0.0], [0.3, 0.2]]])
+    p2 = _in_plane(fg, ORIGIN + s[:, :1] * A1 + s[:, 1:] * A2)
+    r = np.full(len(p2), 0.01)
+    disk = disk_stencil(4, 16)
+    fits = _locate(fg, grid, (p2[:, None, :] + r[:, None, None] * disk[None]).reshape(-1, 2))[3]
+    fits = fits.reshape(len(p2), -1).all(axis=1)
+    may = _disk_may_fit(segs, p2, r, disk, 16)
+    assert not fits[~may].any()
+    assert (~may).sum() > 300 and fits[may].mean() > 0.5  # edge events left out; most tried ones fit
+
+
+def test_a_non_convex_outline_tries_every_disk():
+    # Reference: the supporting-line argument of _disk_may_fit holds on convex outlines only; an
+    # L-shaped outline (a reflex corner at (1, 1)) must leave no disk out, a square may.
+    from flexnet_fe.shell.transfer import _convex, _disk_may_fit, disk_stencil
+
+    def outline(corners):
+        c = np.asarray(corners, float)
+        return np.stack([c, np.roll(c, -1, axis=0)], axis=1)
+
+    square = outline([[0, 0], [2, 0], [2, 2], [0, 2]])
+    ell = outline([[0, 0], [2, 0], [2, 1], [1, 1], [1, 2], [0, 2]])
+    assert _convex(square) and not _convex(ell)
+    p2 = np.array([[1.0, 0.0], [0.5, 0.5], [1.2, 1.0]])
+    disk = disk_stencil(3, 8)
+    assert _disk_may_fit(ell, p2, np.full(3, 0.3), disk, 8).all()
+    assert _disk_may_fit(square, p2, np.full(3, 0.3), disk, 8).tolist() == [False, True, True]
