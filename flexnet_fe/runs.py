@@ -43,6 +43,7 @@ import socket
 import sys
 import threading
 import time
+import weakref
 from contextlib import contextmanager
 from dataclasses import dataclass
 from datetime import datetime, timezone
@@ -186,11 +187,14 @@ def last_output_time(folder: Path) -> float | None:
 
 class _SignalState:
     """The interrupt in progress: ``pending`` signal number, ``handled`` once the code that
-    caught :class:`Interrupted` has started its clean-up, ``depth`` of nested handler blocks."""
+    caught :class:`Interrupted` has started its clean-up, ``inflight`` a weak reference to the
+    last Interrupted raised (alive while it propagates; dead once swallowed), ``depth`` of nested
+    handler blocks."""
 
     pending: int | None = None
     handled: bool = False
     redeliver: threading.Thread | None = None
+    inflight: weakref.ref | None = None
     depth: int = 0
 
 
@@ -200,7 +204,10 @@ REDELIVER_S = 0.25
 """If an Interrupted raised by the handler is swallowed (Python ignores exceptions raised inside
 ``__del__`` and weakref callbacks, where a signal can land — seen in an import's module-lock
 callback), the signal is delivered again after this many seconds [s], until some code reports it
-handled. Short, so that the stage the user interrupted is still the one running (at 2 s a 1.3 s
+handled — acted on only once that Interrupted is gone (``_SignalState.inflight``): one still on its
+way out through a slow clean-up is not cut short by a second (CI, 2026-11-27: the collide stage's
+check process being joined; a later one landing in the stage's handler before it could record the
+interrupt left the stage 'running' and ended the process by the bare signal). Short, so that the stage the user interrupted is still the one running (at 2 s a 1.3 s
 deploy finished first and the interrupt came only after it: CI, 2026-11-27)."""
 
 
@@ -209,11 +216,19 @@ def _on_signal(signum, frame):
 
     if _SIG.handled:
         return  # the clean-up is running (a few renames and writes): let it finish
+    if _SIG.inflight is not None and _SIG.inflight() is not None:
+        return  # the last Interrupted is still on its way out (through slow clean-ups: a process
+        #         joined): a second one would cut them short, or land in the handler itself
     _SIG.pending = signum
     if _SIG.redeliver is None:
         _SIG.redeliver = threading.Thread(target=_redeliver, daemon=True)
         _SIG.redeliver.start()
-    raise Interrupted(signum)
+    err = Interrupted(signum)
+    _SIG.inflight = weakref.ref(err)
+    try:
+        raise err
+    finally:
+        del err  # (no reference from this frame: a swallowed Interrupted dies at once)
 
 
 def _redeliver() -> None:
@@ -249,7 +264,7 @@ def signal_handlers():
         if _SIG.depth == 0:  # an Interrupted leaving the block is not lost: the caller's except handles it
             leaving = isinstance(sys.exc_info()[1], KeyboardInterrupt)
             lost = _SIG.pending if not (_SIG.handled or leaving) else None
-            _SIG.pending, _SIG.handled, _SIG.redeliver = None, False, None
+            _SIG.pending, _SIG.handled, _SIG.redeliver, _SIG.inflight = None, False, None, None
             if lost is not None:  # the Interrupted was swallowed and the block ended: not lost
                 print(f"flexnet: signal {signal.Signals(lost).name} arrived where it could not be handled; "
                       "ending with it", file=sys.stderr, flush=True)

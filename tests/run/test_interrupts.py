@@ -80,6 +80,38 @@ def test_a_swallowed_signal_is_delivered_again_or_ends_the_process(after_s):
                                                        "handled; ending with it")
 
 
+_SLOW_CLEANUP = """
+import os, signal, sys, time
+from flexnet_fe.runs import interrupt_handled, signal_handlers
+
+try:
+    with signal_handlers():
+        try:
+            os.kill(os.getpid(), signal.SIGTERM)
+            time.sleep(5)
+        finally:
+            time.sleep(1.0)  # a slow clean-up (the collide stage joins its check's process here)
+            print("clean-up done", flush=True)
+except KeyboardInterrupt as err:
+    interrupt_handled()
+    print("caught", err.exit_code)
+    sys.exit(err.exit_code)
+"""
+
+
+def test_a_slow_clean_up_is_not_cut_short_by_the_redelivery():
+    # Reference: runs.signal_handlers' contract — the signal is delivered again only when its
+    # Interrupted was swallowed. One still propagating through a clean-up longer than REDELIVER_S
+    # (4 redeliveries' worth) reaches its handler alone: the clean-up completes. (Before: the
+    # redelivered signal raised a second Interrupted inside it, and one landing in the stage's
+    # handler before it recorded the interrupt escaped it — CI's exit -15 with the stage 'running'.)
+    import subprocess
+    import sys
+
+    out = subprocess.run([sys.executable, "-c", _SLOW_CLEANUP], capture_output=True, text=True, cwd=ROOT, timeout=60)
+    assert (out.returncode, out.stdout.split("\n")[:2]) == (143, ["clean-up done", "caught 143"]), out
+
+
 @pytest.mark.parametrize("name", ["SIGINT", "SIGTERM"])
 def test_signal_in_deploy(tmp_path, name):
     sig, code = SIGNALS[name]
