@@ -91,12 +91,22 @@ def air_rows(ctx: Context, notes: list[str]) -> list[dict]:
     return out
 
 
+def _finer_splits(stage_rows: list[dict]) -> list[int]:
+    """The collide record's ``collide.rope_split`` values finer than the shipped one: less lumped
+    ropes near the contact, the simplification's "without" (a coarser split is more of it)."""
+    from flexnet_fe.study.collide import shipped_rope_split
+
+    k = shipped_rope_split()
+    return sorted({int(float(r["value"])) for r in stage_rows
+                   if r["stage"] == "collide" and r["knob"] == "collide.rope_split" and int(float(r["value"])) > k})
+
+
 def rows(stage_rows: list[dict], notes: list[str], ctx: Context | None = None) -> list[dict]:
     """The table; ``notes`` receives a line per simplification that cannot be switched. With
     ``ctx`` the air pair is measured (:func:`air_rows`); without, it is noted as not measured."""
     out = []
     out += _pair(stage_rows, "collide", "collide.crop", "false", "cropped net (collide.crop)", "full net")
-    for v in (2, 4):
+    for v in _finer_splits(stage_rows):
         out += _pair(stage_rows, "collide", "collide.rope_split", v, "lumped ropes near contact",
                      f"collide.rope_split = {v}")
     out += _pair(stage_rows, "collide", "net.subdivisions", 2, "lumped ropes (one segment per bar)",
