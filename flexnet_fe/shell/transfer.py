@@ -177,16 +177,16 @@ def _bucket_items(box, lo, size, shape):
                 count[ix * shape[1] + iy + 1] += 1
     start = np.cumsum(count)
     fill = start[:-1].copy()
-    cells = np.empty(start[-1], np.int64)
+    items = np.empty(start[-1], np.int64)
     for c in range(box.shape[0]):
         x0, x1 = _bucket_range(box[c, 0], box[c, 2], lo[0], size, shape[0])
         y0, y1 = _bucket_range(box[c, 1], box[c, 3], lo[1], size, shape[1])
         for ix in range(x0, x1 + 1):
             for iy in range(y0, y1 + 1):
                 b = ix * shape[1] + iy
-                cells[fill[b]] = c
+                items[fill[b]] = c
                 fill[b] += 1
-    return start, cells
+    return start, items
 
 
 @njit(cache=True)
