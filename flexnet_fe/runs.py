@@ -207,8 +207,9 @@ callback), the signal is delivered again after this many seconds [s], until some
 handled — acted on only once that Interrupted is gone (``_SignalState.inflight``): one still on its
 way out through a slow clean-up is not cut short by a second (CI, 2026-11-27: the collide stage's
 check process being joined; a later one landing in the stage's handler before it could record the
-interrupt left the stage 'running' and ended the process by the bare signal). Short, so that the stage the user interrupted is still the one running (at 2 s a 1.3 s
-deploy finished first and the interrupt came only after it: CI, 2026-11-27)."""
+interrupt left the stage 'running' and ended the process by the bare signal). Short, so that the
+stage the user interrupted is still the one running (at 2 s a 1.3 s deploy finished first and the
+interrupt came only after it: CI, 2026-11-27)."""
 
 
 def _on_signal(signum, frame):
