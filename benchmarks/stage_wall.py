@@ -6,7 +6,8 @@ the change), alternated in one run, on copies of one finished run directory.
 
 Each measurement copies RUN_DIR (without the stage's own folder) to a scratch folder and runs
 ``flexnet run CASE_DIR --stages STAGE`` there in its own process with the tree first on PYTHONPATH.
-Row: tree, wall [s] and peak resident memory [GiB] of the process, the stage summary's ``*wall_s`` keys, and per fin (shell) the
+Row: tree, wall [s] and peak resident memory [GiB] of the process (GNU time: /usr/bin/time, Debian
+package ``time``), the stage summary's ``*wall_s`` keys, and per fin (shell) the
 peak von Mises [Pa] — which must not depend on the tree when the change is one of scheduling —
 with the load average and the machine (docs/performance.md)."""
 

@@ -376,7 +376,8 @@ def contact_transfer(fg: FinGeometry, points: np.ndarray, widths: np.ndarray, *,
     GL = np.polynomial.legendre.leggauss(n_line)
     LINE = GL[0]
     nd = len(DISK)
-    tried = np.flatnonzero(_disk_may_fit(segs, p2, r, DISK, n_phi))
+    _, dist, edge_dir = _nearest_on_boundary(segs, p2)  # (the snapped centres: once for both uses)
+    tried = np.flatnonzero(_disk_may_fit(segs, dist, r, DISK, n_phi))
     pts = (p2[tried, None, :] + r[tried, None, None] * DISK[None]).reshape(-1, 2)
     cell, X, mine, found = _locate(fg, grid, pts)
     ok = found.reshape(len(tried), nd).all(axis=1)
@@ -388,7 +389,7 @@ def contact_transfer(fg: FinGeometry, points: np.ndarray, widths: np.ndarray, *,
     cells, Xs = [cell], [X]
     todo = np.flatnonzero(~ok_disk)
     if len(todo):
-        tdir = _nearest_on_boundary(segs, p2[todo])[2]
+        tdir = edge_dir[todo]
         half = r[todo].copy()
         nl = len(LINE)
         for _ in range(12):
@@ -419,10 +420,11 @@ def contact_transfer(fg: FinGeometry, points: np.ndarray, widths: np.ndarray, *,
     return _owned_rows(fg.V, G, comm)
 
 
-def _disk_may_fit(segs: np.ndarray, p2: np.ndarray, r: np.ndarray, disk: np.ndarray, n_phi: int) -> np.ndarray:
-    """Whether the disk stencil of each event (centre ``p2`` (ne, 2) [m], radius ``r`` (ne,) [m],
-    unit stencil ``disk`` with ``n_phi`` points per ring) may lie on the fin; False only where it
-    certainly does not, so that the events left out would have failed the disk test anyway.
+def _disk_may_fit(segs: np.ndarray, dist: np.ndarray, r: np.ndarray, disk: np.ndarray, n_phi: int) -> np.ndarray:
+    """Whether the disk stencil of each event (its centre at ``dist`` (ne,) [m] from the outline
+    ``segs``, radius ``r`` (ne,) [m], unit stencil ``disk`` with ``n_phi`` points per ring) may lie on
+    the fin; False only where it certainly does not, so that the events left out would have failed
+    the disk test anyway.
 
     Reason: on a convex outline the tangent at a centre's nearest boundary point (distance δ) is a
     supporting line of the fin, and the outer ring (radius ρ r) has a point within π/n_phi of
@@ -431,8 +433,7 @@ def _disk_may_fit(segs: np.ndarray, p2: np.ndarray, r: np.ndarray, disk: np.ndar
     finely sampled loads, centred on the outline — are thus not located a hundred times over.
     A non-convex outline: every disk is tried."""
     if not _convex(segs):
-        return np.ones(len(p2), dtype=bool)
-    dist = _nearest_on_boundary(segs, p2)[1]
+        return np.ones(len(dist), dtype=bool)
     reach = r * float(np.linalg.norm(disk, axis=1).max()) * math.cos(math.pi / n_phi)
     return dist + 1e-9 >= reach
 

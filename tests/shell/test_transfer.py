@@ -176,8 +176,8 @@ def test_a_disk_left_out_would_not_have_fitted():
     # Reference: the disk stencil located point by point. _disk_may_fit may only leave out events
     # whose disk has a point off the fin (it saves locating them); centres on the outline (edge
     # contacts), near it and inside are asked, and inside ones must be tried.
-    from flexnet_fe.shell.transfer import (_boundary_segments, _disk_may_fit, _in_plane, _locate, cell_grid,
-                                           disk_stencil)
+    from flexnet_fe.shell.transfer import (_boundary_segments, _disk_may_fit, _in_plane, _locate,
+                                           _nearest_on_boundary, cell_grid, disk_stencil)
 
     _, fg = _skewed_plate()
     segs = _boundary_segments(fg)
@@ -191,7 +191,7 @@ def test_a_disk_left_out_would_not_have_fitted():
     disk = disk_stencil(4, 16)
     fits = _locate(fg, grid, (p2[:, None, :] + r[:, None, None] * disk[None]).reshape(-1, 2))[3]
     fits = fits.reshape(len(p2), -1).all(axis=1)
-    may = _disk_may_fit(segs, p2, r, disk, 16)
+    may = _disk_may_fit(segs, _nearest_on_boundary(segs, p2)[1], r, disk, 16)
     assert not fits[~may].any()
     assert (~may).sum() > 300 and fits[may].mean() > 0.5  # edge events left out; most tried ones fit
 
@@ -199,7 +199,7 @@ def test_a_disk_left_out_would_not_have_fitted():
 def test_a_non_convex_outline_tries_every_disk():
     # Reference: the supporting-line argument of _disk_may_fit holds on convex outlines only; an
     # L-shaped outline (a reflex corner at (1, 1)) must leave no disk out, a square may.
-    from flexnet_fe.shell.transfer import _convex, _disk_may_fit, disk_stencil
+    from flexnet_fe.shell.transfer import _convex, _disk_may_fit, _nearest_on_boundary, disk_stencil
 
     def outline(corners):
         c = np.asarray(corners, float)
@@ -210,5 +210,6 @@ def test_a_non_convex_outline_tries_every_disk():
     assert _convex(square) and not _convex(ell)
     p2 = np.array([[1.0, 0.0], [0.5, 0.5], [1.2, 1.0]])
     disk = disk_stencil(3, 8)
-    assert _disk_may_fit(ell, p2, np.full(3, 0.3), disk, 8).all()
-    assert _disk_may_fit(square, p2, np.full(3, 0.3), disk, 8).tolist() == [False, True, True]
+    assert _disk_may_fit(ell, _nearest_on_boundary(ell, p2)[1], np.full(3, 0.3), disk, 8).all()
+    assert _disk_may_fit(square, _nearest_on_boundary(square, p2)[1], np.full(3, 0.3), disk,
+                         8).tolist() == [False, True, True]
