@@ -59,17 +59,18 @@ def run_collide(net_cfg, deploy_cfg, missile_cfg: MissileConfig, collide_cfg: Co
     check = start_check(net, missile, collide_cfg, air, log) if collide_cfg.resolution_check else None
     try:
         res = simulate(net, missile, collide_cfg, air.gravity, log, air_density=air.density)
+        # the files and plots while the check (beside) runs on: they do not depend on it
+        net = res.net  # split near the path per collide.rope_split
+        write_outputs(res, net.model.springs[res.alive], net.rest_length[res.alive],
+                      net.model.stiffness[res.alive], missile, stage_dir)
+        from flexnet_fe.collide.plots import plot_all
+
+        plot_all(res, missile, collide_cfg, stage_dir, title=f"{missile.name} missile vs {net.model.kind} net")
         if check is not None:
             finish_check(res.summary, check, collide_cfg, log)
     finally:
         if check is not None:
             check.stop()
-    net = res.net  # split near the path per collide.rope_split
-    write_outputs(res, net.model.springs[res.alive], net.rest_length[res.alive],
-                  net.model.stiffness[res.alive], missile, stage_dir)
-    from flexnet_fe.collide.plots import plot_all
-
-    plot_all(res, missile, collide_cfg, stage_dir, title=f"{missile.name} missile vs {net.model.kind} net")
     s = res.summary
     log.info("collide: peak |a| = %.4g m/s² at %.4g s, |Δv|/v = %.3g, attitude change %.3g rad, contact "
              "duration %.4g s (stopped: %s at %.4g s), %s, max penetration %.3g m, momentum error %.2g, energy error %.2g, %d broken "
