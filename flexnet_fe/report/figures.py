@@ -180,9 +180,15 @@ def _fin_picture_job(run: RunData, fin: str, res: dict, out_dir: Path,
             if isinstance(loc, list) and len(loc) == 3 and isinstance(vm, (int, float)) and isinstance(t, (int, float))
             else None)
     if envelope.is_file():
-        return ({"kind": "stress", "args": {"xdmf": str(envelope), "png": png, "title": title, "mark": mark}},
+        # the colour scale ends at the structural peak: the zones at the loads, far above it, would
+        # otherwise take the whole scale and leave the fin's structural field one dark colour
+        top = float(vm) if isinstance(vm, (int, float)) and vm > 0 else None
+        return ({"kind": "stress", "args": {"xdmf": str(envelope), "png": png, "title": title, "mark": mark,
+                                            "top_pa": top}},
                 "peak over time of the cell von Mises stress, St-Venant zones at the loads included "
-                "(envelope.xdmf; the structural peak, the dot, is taken outside them)")
+                "(envelope.xdmf; the structural peak, the dot, is taken outside them"
+                + (f"; the colour scale ends at it, {top * PA_TO_MPA:.4g} MPa, magenta above: inside the zones)"
+                   if top else ")"))
     if fields.is_file():
         return ({"kind": "stress", "args": {"xdmf": str(fields), "png": png, "time_s": t, "title": title,
                                             "mark": mark}},

@@ -31,6 +31,7 @@ import numpy as np
 
 from flexnet_fe.errors import FlexnetError
 from flexnet_fe.io import pvd_entries
+from flexnet_fe.report.scenes import ABOVE_COLOUR
 from flexnet_fe.report.units import PA_TO_MPA
 
 ENVELOPE_FIELD = "peak_von_mises_pa"
@@ -131,11 +132,14 @@ def _nodal_counterpart(xdmf: Path, label: str, t: float, n_points: int) -> np.nd
 
 
 def render_stress(xdmf: Path, png: Path, *, time_s: float | None = None, field: str | None = None,
-                  title: str = "", window: tuple[int, int] = (900, 700), mark: list | None = None) -> Picture:
+                  title: str = "", window: tuple[int, int] = (900, 700), mark: list | None = None,
+                  top_pa: float | None = None) -> Picture:
     """Draw a fin's von Mises stress [MPa] (or the named cell ``field``) from ``xdmf`` at the
     output time nearest ``time_s`` into ``png``, seen normal to the fin plane, undeformed mesh
     with its element edges. Coordinates are those of the file (frame B for the shell stage).
-    ``mark = [x, y, z, label]`` marks a point [m] (the peak location) with a labelled dot."""
+    ``mark = [x, y, z, label]`` marks a point [m] (the peak location) with a labelled dot.
+    ``top_pa`` [Pa]: the colour scale ends there (values above it magenta), else at the field's
+    maximum."""
     offscreen_env()
     import pyvista as pv
 
@@ -163,7 +167,9 @@ def render_stress(xdmf: Path, png: Path, *, time_s: float | None = None, field: 
     png.parent.mkdir(parents=True, exist_ok=True)
     pl = pv.Plotter(off_screen=True, window_size=list(window))
     try:
-        pl.add_mesh(mesh, scalars=bar, cmap="turbo", show_edges=True, edge_color="gray",
+        top = top_pa is not None and 0.0 < top_pa < float(values.max())
+        pl.add_mesh(mesh, scalars=bar, cmap="turbo", show_edges=True, edge_color="gray", edge_opacity=0.25,
+                    clim=[0.0, top_pa * PA_TO_MPA] if top else None, above_color=ABOVE_COLOUR if top else None,
                     scalar_bar_args={"title": bar, "vertical": True, "fmt": "%.4g"})
         centre = np.asarray(mesh.center)
         size = float(np.linalg.norm(np.ptp(np.asarray(mesh.points), axis=0))) or 1.0
@@ -173,7 +179,8 @@ def render_stress(xdmf: Path, png: Path, *, time_s: float | None = None, field: 
         heading = title or xdmf.name
         # the envelope's single time value is a placeholder, not an instant
         time_txt = "" if math.isnan(t) or label in (ENVELOPE_FIELD, ENVELOPE_FIELD[:-3] + "_nodal_pa") else f", t = {t * 1e3:.4g} ms"
-        pl.add_text(f"{heading}\n{label}{time_txt}\nmax {values.max() * PA_TO_MPA:.4g} MPa",
+        scale = f"; magenta above {top_pa * PA_TO_MPA:.4g} MPa" if top else ""
+        pl.add_text(f"{heading}\n{label}{time_txt}\nmax {values.max() * PA_TO_MPA:.4g} MPa{scale}",
                     font_size=10, position="upper_left")
         if mark is not None:
             pl.add_point_labels(pv.PolyData(np.array([mark[:3]], dtype=float)), [str(mark[3])],
@@ -262,8 +269,8 @@ def render_stress_isolated(jobs: list[StressJob]) -> list[Picture | str]:
 
 
 def _stress_job(xdmf: str, png: str, time_s: float | None = None, title: str = "",
-                mark: list | None = None) -> dict:
-    pic = render_stress(Path(xdmf), Path(png), time_s=time_s, title=title, mark=mark)
+                mark: list | None = None, top_pa: float | None = None) -> dict:
+    pic = render_stress(Path(xdmf), Path(png), time_s=time_s, title=title, mark=mark, top_pa=top_pa)
     return {"png": str(pic.png), "field": pic.field, "time_s": pic.time_s, "max_pa": pic.max_pa}
 
 

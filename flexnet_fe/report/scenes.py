@@ -27,7 +27,8 @@ WARP = 50.0
 """Displacement magnification of the at-peak missile picture (fin deflections are mm)."""
 
 ABOVE_COLOUR = "magenta"
-"""Colour of cells whose stress exceeds the allowable (end of the colour scale)."""
+"""Colour of cells whose stress exceeds the end of the colour scale (the allowable on the missile,
+the structural peak on a fin's envelope)."""
 
 NET_CROP_M = 2.0
 """Half-width [m] of the box around the missile path in which net segments are drawn."""

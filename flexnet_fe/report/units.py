@@ -56,6 +56,7 @@ KEY_UNITS: dict[str, Unit] = {
     "written": Unit("date"),
     "k_dc": DIMENSIONLESS,                            # three-loop autopilot DC gain 1 + 1/(K_a V)
     "k_phi": DIMENSIONLESS,                           # roll-angle gain, rad of fin per rad of roll
+    "tolerance": DIMENSIONLESS,                       # a relative move allowed (collide.resolution_tolerance)
 }
 """Whole last key segment → unit (takes precedence over suffixes)."""
 
@@ -138,9 +139,15 @@ def unit_label(key: str, value=None) -> str:
 
 
 def unknown_units(keys_values: dict) -> list[str]:
-    """Numeric keys of a flattened section whose unit this table does not know."""
-    return [k for k, v in keys_values.items()
-            if isinstance(v, (int, float, list)) and not isinstance(v, bool) and unit_of(k) is NO_UNIT]
+    """Numeric keys of a flattened section whose unit this table does not know (a list counts as
+    numeric when it holds numbers; a list of names, such as ``resolution_check.flagged``, needs none)."""
+    return [k for k, v in keys_values.items() if _numeric(v) and unit_of(k) is NO_UNIT]
+
+
+def _numeric(v) -> bool:
+    if isinstance(v, list):
+        return any(_numeric(x) for x in v)
+    return isinstance(v, (int, float)) and not isinstance(v, bool)
 
 
 def format_value(value, unit: Unit = Unit("")) -> str:

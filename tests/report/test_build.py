@@ -292,3 +292,26 @@ def test_envelope_maximum_is_checked_against_the_peak_with_load_zones(tmp_path):
     assert notes == []
     _fin_caption(run, "wing_1", dict(res, peak_von_mises_with_load_zones_pa=80e6), "envelope", result, notes)
     assert len(notes) == 1 and "peak_von_mises_with_load_zones_pa" in notes[0]
+
+
+def test_envelope_picture_scale_ends_at_the_structural_peak(tmp_path):
+    """The fin's envelope picture: its colour scale ends at the summary's structural peak (the
+    zones at the loads, far above it, in the above-colour), and the caption says so; without an
+    envelope the field picture keeps its own scale (reference: the summary values passed in)."""
+    from types import SimpleNamespace
+
+    from flexnet_fe.report.figures import _fin_picture_job
+
+    fin_dir = tmp_path / "shell" / "wing_1"
+    fin_dir.mkdir(parents=True)
+    (fin_dir / "envelope.xdmf").write_text("")
+    run = SimpleNamespace(run_dir=tmp_path)
+    res = {"peak_von_mises_pa": 162.9e6, "peak_location_m": [0.0, 0.1, 0.2], "peak_time_s": 3.8e-3}
+    job, what = _fin_picture_job(run, "wing_1", res, tmp_path / "out")
+    assert job["args"]["top_pa"] == 162.9e6 and "ends at it, 162.9 MPa" in what
+    job, what = _fin_picture_job(run, "wing_1", dict(res, peak_von_mises_pa=None), tmp_path / "out")
+    assert job["args"]["top_pa"] is None and "ends at it" not in what
+    (fin_dir / "envelope.xdmf").unlink()
+    (fin_dir / "fields.xdmf").write_text("")
+    job, _ = _fin_picture_job(run, "wing_1", res, tmp_path / "out")
+    assert "top_pa" not in job["args"]

@@ -36,6 +36,10 @@ def test_unit_table(key, label, scale):
 def test_unknown_unit_is_flagged_not_guessed():
     assert unit_of("mystery_number") is NO_UNIT
     assert unknown_units({"a.mystery_number": 3.0, "a.flag": True, "a.name": "x", "a.dt_s": 1.0}) == ["a.mystery_number"]
+    # lists: numbers need a unit, names (collide.resolution_check.flagged) and an empty list do not
+    assert unknown_units({"a.mystery_list": [1.0, 2.0], "a.flagged": ["rudder_3 impulse"], "a.none": [],
+                          "a.point_m": [0.0, 1.0]}) == ["a.mystery_list"]
+    assert unit_of("collide.resolution_check.tolerance").label == "–"
     assert unit_label("hit", True) == "" and unit_label("dt_s", 1.0) == "s"
     assert with_unit(541.6e6, unit_of("x_pa")) == "541.6 MPa"
     assert format_value(None) == "—" and format_value(True) == "yes"
