@@ -331,3 +331,20 @@ def test_fin_gaps_bound_the_gap_to_the_nearest_fin(radar, scenes):
         assert K.fin_gaps(km, st)[0] == pytest.approx(lift, abs=1e-12)
     st.alive[0] = False
     assert K.fin_gaps(km, st)[0] == np.inf
+
+
+def test_fin_gaps_skip_rule_gives_the_minimum_over_every_fin(radar, scenes):
+    # Reference: a second model, every fin's _fin_gap evaluated and the minimum taken. fin_gaps
+    # skips a fin whose mid-plane term is not below the smallest gap so far; the minimum must be
+    # the same to the last bit, for segments anywhere around the fins (both sides of their planes,
+    # crossing them, near and far).
+    rng = np.random.default_rng(7)
+    lo, hi = np.array([-3.6, -0.45, -0.45]), np.array([-1.2, 0.45, 0.45])
+    for _ in range(300):
+        a = lo + (hi - lo) * rng.random(3)
+        b = a + rng.normal(scale=0.02, size=3)
+        km, st = scenes.segment_scene(radar, a, b, [0, 0, 0], [0, 0, 0])
+        pl, rh = K._fin_half_spaces(km), km.fin_half + km.rope_radius
+        ref = min(K._fin_gap(pl, fi, rh[fi], st.x[0] - st.mx + km.cg_b, st.x[1] - st.mx + km.cg_b)
+                  for fi in range(km.fin_half.shape[0]))
+        assert K.fin_gaps(km, st)[0] == ref
