@@ -10,7 +10,7 @@ the change), alternated in one run, on copies of one finished run directory.
 
 Each measurement copies RUN_DIR (without the stage's own folder) to a scratch folder and runs
 ``flexnet run CASE_DIR --stages STAGE`` there in its own process with the tree first on PYTHONPATH.
-Row: tree, wall [s] and peak resident memory [GiB] of the process (GNU time: /usr/bin/time, Debian
+Row: tree, wall [s] (``process_wall_s``) and peak resident memory [GiB] of the process (GNU time: /usr/bin/time, Debian
 package ``time``), the stage summary's ``*wall_s`` keys, and per fin (shell) the
 peak von Mises [Pa] — which must not depend on the tree when the change is one of scheduling —
 with the load average and the machine (docs/performance.md)."""
@@ -44,7 +44,10 @@ def measure(tree: Path, case: str, run_dir: Path, stage: str, setting: str | Non
         wall = time.perf_counter() - t0
         s = json.loads((copy / "summary.json").read_text())[stage]
         max_rss_gb = int(rss.read_text().split()[-1]) / 1024 ** 2
-    row = {"wall_s": wall, "max_rss_gb": max_rss_gb, **{k: v for k, v in s.items() if k.endswith("wall_s")}}
+    row = {"process_wall_s": wall, "max_rss_gb": max_rss_gb, **{k: v for k, v in s.items() if k.endswith("wall_s")}}
+    if stage == "collide":  # the check's own wall, and the headlines (which a speed change must not move)
+        row["check_wall_s"] = (s.get("resolution_check") or {}).get("wall_s")
+        row.update({k: s[k] for k in ("dv_over_v", "peak_accel_mps2", "fin_impulse_ns") if k in s})
     if stage == "shell":
         fins = {k: v for k, v in s.items() if isinstance(v, dict) and "peak_von_mises_pa" in v}
         row["peaks_pa"] = {k: v["peak_von_mises_pa"] for k, v in fins.items()}
