@@ -3,7 +3,7 @@ the change), alternated in one run, on copies of one finished run directory.
 
     PYTHONPATH=. .venv/bin/python benchmarks/stage_wall.py OUT.jsonl CASE_DIR RUN_DIR --stage shell \\
         --trees OLD_TREE NEW_TREE [--repeat 1]
-    PYTHONPATH=. .venv/bin/python benchmarks/stage_wall.py OUT.jsonl CASE_DIR RUN_DIR --stage shell \
+    PYTHONPATH=. .venv/bin/python benchmarks/stage_wall.py OUT.jsonl CASE_DIR RUN_DIR --stage shell \\
         --sets KEY=A KEY=B [--repeat 1]
 
 ``--sets``: one tree (this one), two values of a case field (``flexnet run --set``) instead.

@@ -187,7 +187,7 @@ def _fin_picture_job(run: RunData, fin: str, res: dict, out_dir: Path,
                                             "top_pa": top}},
                 "peak over time of the cell von Mises stress, St-Venant zones at the loads included "
                 "(envelope.xdmf; the structural peak, the dot, is taken outside them"
-                + (f"; the colour scale ends at it, {top * PA_TO_MPA:.4g} MPa, magenta above: inside the zones)"
+                + (f"; the colour scale ends at it, {top * PA_TO_MPA:.4g} MPa, magenta above: values reached inside the zones)"
                    if top else ")"))
     if fields.is_file():
         return ({"kind": "stress", "args": {"xdmf": str(fields), "png": png, "time_s": t, "title": title,
