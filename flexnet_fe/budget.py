@@ -190,7 +190,8 @@ def collide_cost(case, file) -> StageCost:
 def _collide_step(case, l0: float) -> float:
     """dt [s] of ``collide.timestep.choose_step`` for the case (``collide_cost``); l0 [m] the
     deployed net's segment rest length."""
-    from flexnet_fe.collide.timestep import choose_step, contact_stiffness
+    from flexnet_fe.collide.config import ContactLaw
+    from flexnet_fe.collide.timestep import choose_step, contact_stiffness, line_stiffnesses
     from flexnet_fe.net.forces import rope_material
     from flexnet_fe.net.topology import rope_area
 
@@ -208,7 +209,12 @@ def _collide_step(case, l0: float) -> float:
                                       0.5 * m.body_diameter)
     ea = np.array([rope.youngs_modulus * float(rope_area(rope.diameter)) / piece])
     mass = np.array([mu * piece])
-    dt = choose_step(cc, ea, mass, mass, m_min, n_seg, rope.radius, fin_half, max(k_body, k_fin)).dt
+    line = None
+    if cc.contact_law is ContactLaw.line:  # the unstretched rope's mass per length
+        kl_body, kl_fin = line_stiffnesses(cc, rope.radius, rope.transverse_modulus, rope.poisson_ratio,
+                                           np.array([fin_half]), 0.5 * m.body_diameter)
+        line = (max(kl_body, float(kl_fin.max())), mu)
+    dt = choose_step(cc, ea, mass, mass, m_min, n_seg, rope.radius, fin_half, max(k_body, k_fin), line).dt
     return cc.load_dt / math.ceil(cc.load_dt / dt)  # a whole number of steps per fin-load interval (simulate)
 
 

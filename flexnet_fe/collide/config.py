@@ -35,6 +35,25 @@ class StiffnessRule(str, Enum):
     given = "given"
 
 
+class ContactLaw(str, Enum):
+    """How a rope segment in contact with a part is loaded (``collide.kernel``).
+
+    segment  Eq. (28) once per (segment, part) pair at the segment's closest point: a point law
+             per segment, so the total force of a rope pressed on a part at a given depth grows
+             with the number of segments in contact — ×2.0 / 3.0 / 5.0 at 1.4 / 0.7 / 0.35 mm
+             chords for a rope crossing a fin edge 0.2 mm deep (docs/validation.md, "Line contact")
+    line     the linear line-load law q = k_l δ [N/m] integrated along each segment by a midpoint
+             rule with points h to 2h apart, h = r / ``line_points_per_radius`` (``kernel._line_contact``);
+             k_l chosen so that a straight rope crossing the part's curved surface gets Eq. (30)'s
+             K δ0^1.5 (``contact.stiffness.line_stiffness``): the total force converges as the rope
+             is cut finer. Not the default yet: docs/validation.md, "Line contact", says what
+             switching needs
+    """
+
+    segment = "segment"
+    line = "line"
+
+
 class CollideConfig(Section):
     """The ``[collide]`` table: scene, contact law, detection, time step, crop and outputs."""
 
@@ -77,6 +96,13 @@ class CollideConfig(Section):
     friction_regularisation_speed: Positive = Field(
         0.1, description="v_reg of tanh(|v_t|/v_reg) replacing sign(v_t) in Eq. (32) [m/s]")
     stiffness_rule: StiffnessRule = Field(StiffnessRule.hertz_eq30, description="rule for the contact stiffness K")
+    contact_law: ContactLaw = Field(ContactLaw.segment, description=(
+        "'segment': Eq. (28) once per rope segment at its closest point; 'line': a line-load law integrated "
+        "along the segment, which converges as the rope is cut finer (ContactLaw)"))
+    line_points_per_radius: int = Field(4, ge=1, le=64, description=(
+        "points of the 'line' contact law per rope radius r: they are r / this to 2 r / this apart along "
+        "the rope [-] (a rope crossing a part's sharpest curvature δ deep touches it over ≥ 2√(2 r δ) = r "
+        "at δ = r/8)"))
     contact_stiffness: Positive | None = Field(None, description="K for stiffness_rule = 'given' [N/m^m]")
     rope_split: int = Field(1, ge=1, le=64, description=(
         "split every rope segment whose both ends lie within rope_split_margin of the missile's swept volume "

@@ -15,7 +15,13 @@ Per step (symplectic Euler for the net nodes and the rigid missile, ``rigid_body
    (Eq. (28), K from Eq. (30) per part kind); because p minimises the distance over the segment,
    ∂U/∂x_i = −(1 − s) F n and ∂U/∂x_j = −s F n (envelope theorem), so applying (1 − s, s) × F n
    to the nodes and −F n at q to the missile (with its torque) is exactly the gradient of the
-   stored energy: the contact neither creates nor loses energy beyond the step error;
+   stored energy: the contact neither creates nor loses energy beyond the step error. That is
+   the segment law (``collide.contact_law = "segment"``). The line law (``"line"``,
+   ``_line_contact``) integrates a linear line-load law along the segment instead (n points of the
+   midpoint rule, each its own contact point with the same damping and friction), so the force of
+   a rope pressed on a part does not grow with the number of segments that reach it: once per
+   segment, Eq. (28) gives a rope crossing an edge 2 / 3 / 5 × Eq. (30)'s energy at 1.4 / 0.7 /
+   0.35 mm chords (tests/collide/test_line_contact.py);
 3. Hunt–Crossley damping, Eq. (29): F_n = K δ^m (1 + χ δ̇), χ = damp_c / v_k, with v_k the
    LARGEST approach speed seen in the current contact (≥ v_floor). So χ δ̇ ≤ damp_c while
    approaching: the damping force never exceeds damp_c × the elastic force, whatever part the
@@ -115,7 +121,8 @@ from flexnet_fe.collide.model import (A_AIR_PAID, A_BROKEN, A_CROSS, A_DISS_CONT
                                       TUNNEL)
 from flexnet_fe.collide.rigid_body import RigidBody, rigid_step
 from flexnet_fe.contact.law import approach_speed, contact_potential, friction_force, normal_force
-from flexnet_fe.missile.shapes import FIN_PART_OFFSET, segment_body_closest, segment_core_closest
+from flexnet_fe.missile.shapes import (FIN_PART_OFFSET, body_closest_scalar, point_core_closest,
+                                      segment_body_closest, segment_core_closest)
 from flexnet_fe.net.forces import rope_elastic_energy, spring_force
 from flexnet_fe.frames import quat_to_matrix
 
@@ -504,19 +511,23 @@ def _book_dissipative(free, fd, node, weight, forces):
 
 
 @njit(cache=True, inline="always")  # (module docstring: call cost)
-def _apply(model, state, wk, slot, fin, delta, s, dt):
-    """Force of one (segment, part) contact on the net and the missile, Eq. (28), (29), (32).
+def _apply(model, state, wk, slot, fin, pt, dt, law):
+    """Force of one (segment, part) contact point on the net and the missile, Eq. (28), (29), (32).
 
-    slot: contact slot (segment e = slot // (1 + nf)); fin: fin index or −1 (body); delta [m] > 0
-    penetration; s segment parameter; wk.nb (3,) unit normal (towards the rope) and wk.qb [m]
-    (3,) missile contact point, in B. Adds the force to wk.f (weights 1 − s, s on the segment's
-    nodes) and its reaction to wk.fmt (missile force, torque about the CG, W); books the
-    dissipation; fin ≥ 0: adds the impulse to the fin-load slot. Returns |F| [N]."""
+    slot: contact slot (segment e = slot // (1 + nf)); fin: fin index or −1 (body); pt = (delta,
+    s): penetration [m] > 0 and segment parameter of the point; wk.nb (3,) unit normal (towards the
+    rope) and wk.qb [m] (3,) missile contact point, in B; law = (kk, expo, wstick): the point's
+    stiffness [N/m^expo] and exponent (segment law: K of the part, m; line law: k_l × the point's
+    length, 1) and its share (0, 1] of the segment's discrete-stick friction cap. Adds the force to
+    wk.f (weights 1 − s, s on the segment's nodes) and its reaction to wk.fmt (missile force,
+    torque about the CG, W); books the dissipation; fin ≥ 0: adds the impulse to the fin-load
+    slot. Returns |F| [N]."""
+    delta, s = pt
+    kk, expo, wstick = law
     v, mv = state.v, state.mv
     r, w_w, f, fmt, nb, qb = wk.r, wk.w_w, wk.f, wk.fmt, wk.nb, wk.qb
     e = slot // (model.fin_half.shape[0] + 1)
     i, j = model.seg[e, 0], model.seg[e, 1]
-    kk = model.k_fin if fin >= 0 else model.k_body
     nw0, nw1, nw2 = _rv(r, nb[0], nb[1], nb[2])
     l0, l1, l2 = _rv(r, qb[0] - model.cg_b[0], qb[1] - model.cg_b[1], qb[2] - model.cg_b[2])
     w = 1.0 - s
@@ -527,15 +538,15 @@ def _apply(model, state, wk, slot, fin, delta, s, dt):
     ddot = -vn
     vk = approach_speed(state.vk[slot], ddot, model.v_floor)
     state.vk[slot] = vk
-    fel = kk * delta ** model.exponent
-    fn = normal_force(delta, ddot, kk, model.exponent, model.damp_c / vk)
+    fel = kk * delta ** expo
+    fn = normal_force(delta, ddot, kk, expo, model.damp_c / vk)
     vt0, vt1, vt2 = vr0 - vn * nw0, vr1 - vn * nw1, vr2 - vn * nw2
     inv_m = 1.0 / model.m_mass  # the contact point's effective mass (translation; the missile's
     if model.free[i]:           # rotation adds < 1e-6 of a rope piece's 1/m)
         inv_m += w * w / model.mass[i]
     if model.free[j]:
         inv_m += s * s / model.mass[j]
-    ft0, ft1, ft2 = friction_force(fn, model.mu, vt0, vt1, vt2, model.v_reg, STICK_FRACTION / (inv_m * dt))
+    ft0, ft1, ft2 = friction_force(fn, model.mu, vt0, vt1, vt2, model.v_reg, wstick * STICK_FRACTION / (inv_m * dt))
     f0, f1, f2 = fn * nw0 + ft0, fn * nw1 + ft1, fn * nw2 + ft2
     _apply_to_node(model.free, state.acc, f, i, w, (f0, f1, f2), dt)
     _apply_to_node(model.free, state.acc, f, j, s, (f0, f1, f2), dt)
@@ -566,6 +577,122 @@ def _apply(model, state, wk, slot, fin, delta, s, dt):
         c0, c1, c2 = state.x[j, 0] - state.x[i, 0], state.x[j, 1] - state.x[i, 1], state.x[j, 2] - state.x[i, 2]
         state.fin_len[fs] += fmag * dt * np.sqrt(c0 * c0 + c1 * c1 + c2 * c2)
     return fmag
+
+
+@njit(cache=True, inline="always")  # (module docstring: call cost)
+def _point_depth(model, wk, fin, p0, p1, p2):
+    """Penetration δ [m] of the rope's cross-section centred at (p0, p1, p2) [m] (B) into part
+    ``fin`` (−1: the body), with wk.nb its unit normal (towards the rope) and wk.qb the part's
+    surface point under it; δ ≤ 0: apart (nb, qb then undefined), and 0 when the centre is on the
+    core (a crossing: booked per segment as tunnelling)."""
+    nb, qb = wk.nb, wk.qb
+    if fin < 0:
+        d, nb[0], nb[1], nb[2], qb[0], qb[1], qb[2], _ = body_closest_scalar(
+            (p0, p1, p2), model.prof_kind, model.prof_data, model.prof_part)
+        return model.rope_radius - d if d > 0.0 else 0.0
+    o, ax, half = model.fin_origin[fin], model.fin_axes[fin], model.fin_half[fin]
+    dist, qu, qv = point_core_closest((p0, p1, p2), o, ax, model.fin_core[fin, :model.fin_ncore[fin]])
+    if dist <= 0.0:
+        return 0.0
+    c0 = o[0] + qu * ax[0, 0] + qv * ax[1, 0]
+    c1 = o[1] + qu * ax[0, 1] + qv * ax[1, 1]
+    c2 = o[2] + qu * ax[0, 2] + qv * ax[1, 2]
+    nb[0], nb[1], nb[2] = (p0 - c0) / dist, (p1 - c1) / dist, (p2 - c2) / dist
+    qb[0], qb[1], qb[2] = c0 + half * nb[0], c1 + half * nb[1], c2 + half * nb[2]
+    return model.rope_radius + half - dist
+
+
+@njit(cache=True, inline="always")  # (module docstring: call cost)
+def _line_grid(model, state, wk, slot, fin, geo, dt, apply):
+    """One midpoint rule of ``_line_contact``: geo = (pa, pb, s*, n, weight) — the segment's ends [m]
+    (3,) in B, the parameter of its deepest point, the number of cells n (points s_q = (q + ½)/n, each
+    of length ℓ/n) and the rule's weight in the blend. Points are taken from the cell holding s*
+    outwards until δ ≤ 0 (δ is concave along the segment: convex parts). With ``apply`` each point
+    with δ_q > 0 gets ``_apply`` with the stiffness weight × k_l ℓ/n, exponent 1 and weight/n of the
+    segment's stick cap. Returns (U_n = Σ_q ½ k_l (ℓ/n) δ_q² [J], whether a point touched)."""
+    pa, pb, s_star, n, weight = geo
+    t0, t1, t2 = pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2]
+    kq = (model.kl_fin[fin] if fin >= 0 else model.kl_body) * np.sqrt(t0 * t0 + t1 * t1 + t2 * t2) / n
+    energy = 0.0
+    touched = False
+    qc = min(int(s_star * n), n - 1)
+    for step in (1, -1):
+        q = qc if step == 1 else qc - 1
+        while 0 <= q < n:
+            s = (q + 0.5) / n
+            delta = _point_depth(model, wk, fin, pa[0] + s * t0, pa[1] + s * t1, pa[2] + s * t2)
+            if delta <= 0.0:
+                break
+            touched = True
+            energy += 0.5 * kq * delta * delta
+            if apply:
+                _apply(model, state, wk, slot, fin, (delta, s), dt, (weight * kq, 1.0, weight / n))
+            q += step
+    return energy, touched
+
+
+@njit(cache=True, inline="always")  # (module docstring: call cost)
+def _line_contact(model, state, wk, slot, fin, seg_pt, dt, apply):
+    """Line contact of a segment with one part, ``collide.contact_law = "line"``
+    (``contact.stiffness.line_stiffness``); seg_pt = (pa, pb, s*): its ends [m] (3,) in B and the
+    parameter of its point deepest in the part.
+
+    The stored energy is the line integral U = ∫ ½ k_l δ(x)² dl along the segment's current length
+    ℓ, δ(x) the penetration of the rope's cross-section at x, by the composite midpoint rule U_n on
+    n cells of length ℓ/n (``_line_grid``). Points at most 2h apart resolve any contact wider than
+    that (h = model.line_h_*), so n follows the length: with m = ℓ/h, n = max(1, ⌊m⌋) and
+    U = (1 − α) U_n + α U_{n+1}, α = m − n ∈ [0, 1) (0 below m = 1): continuous as ℓ crosses a
+    whole number of h, so the potential never jumps. The forces are its exact gradient: each rule's
+    points (weights 1 − α, α) by the envelope theorem, plus along the segment the length
+    derivative ((1 − α) U_n + α U_{n+1})/ℓ + (U_{n+1} − U_n)/h, which pulls the two ends together
+    (U grows with the length of rope pressed in). Unlike Eq. (28) applied once per segment, the
+    total force of a rope on a part does not grow as the rope is cut finer: it converges to the
+    integral (a rope crossing an edge: K δ0^1.5 of Eq. (30), ``line_stiffness``).
+    Returns the stored energy U [J]; with ``apply``, the slot's approach speed is reset when no
+    point touches."""
+    pa, pb, s_star = seg_pt
+    t0, t1, t2 = pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2]
+    ell = np.sqrt(t0 * t0 + t1 * t1 + t2 * t2)
+    if ell <= 0.0:
+        return 0.0
+    m = ell / (model.line_h_fin[fin] if fin >= 0 else model.line_h_body)
+    n = max(1, int(m))
+    alpha = m - n if m > n else 0.0
+    u_n, touched = _line_grid(model, state, wk, slot, fin, (pa, pb, s_star, n, 1.0 - alpha), dt, apply)
+    u_m = 0.0
+    if alpha > 0.0:
+        u_m, touched_m = _line_grid(model, state, wk, slot, fin, (pa, pb, s_star, n + 1, alpha), dt, apply)
+        touched = touched or touched_m
+    if apply:
+        g = ((1.0 - alpha) * u_n + alpha * u_m) / ell + (u_m - u_n) * m / ell if alpha > 0.0 else u_n / ell
+        tw0, tw1, tw2 = _rv(wk.r, t0 / ell, t1 / ell, t2 / ell)
+        e = slot // (model.fin_half.shape[0] + 1)
+        _apply_to_node(model.free, state.acc, wk.f, model.seg[e, 0], g, (tw0, tw1, tw2), dt)
+        _apply_to_node(model.free, state.acc, wk.f, model.seg[e, 1], -g, (tw0, tw1, tw2), dt)
+        if not touched:
+            state.vk[slot] = 0.0
+    return (1.0 - alpha) * u_n + alpha * u_m
+
+
+@njit(cache=True, inline="always")  # (module docstring: call cost)
+def _pair_contact(model, state, wk, slot, fin, geo, dt, apply):
+    """The contact of a segment with one part once its closest point penetrates: geo = (pa, pb,
+    s, delta, dist) — ends [m] (3,) in B, parameter, penetration [m] > 0 of the closest point and
+    (fins) its distance to the core; wk.nb, wk.qb as ``segment_contacts`` left them (body: normal
+    and surface point; fin: the core point in wk.qb). The line law (``_line_contact``) or Eq. (28)
+    at the closest point. Returns the stored energy [J]."""
+    pa, pb, s, delta, dist = geo
+    if model.line_law:
+        return _line_contact(model, state, wk, slot, fin, (pa, pb, s), dt, apply)
+    kk = model.k_fin if fin >= 0 else model.k_body
+    if apply:
+        if fin >= 0:
+            nb, qb, half = wk.nb, wk.qb, model.fin_half[fin]
+            for k in range(3):
+                nb[k] = (pa[k] + s * (pb[k] - pa[k]) - qb[k]) / dist
+                qb[k] += half * nb[k]  # the fin's surface point under the rope
+        _apply(model, state, wk, slot, fin, (delta, s), dt, (kk, model.exponent, 1.0))
+    return contact_potential(delta, kk, model.exponent)
 
 
 @njit(cache=True, inline="always")  # (module docstring: call cost)
@@ -628,10 +755,9 @@ def segment_contacts(model, state, wk, segs, masks, dt, apply, step):
                 if apply and _tunnel(model, state, base, part, s, step) == TUNNEL:
                     return energy + u_e, TUNNEL, ncon
             elif delta > 0.0:
-                u_e += contact_potential(delta, model.k_body, model.exponent)
                 ncon += 1
+                u_e += _pair_contact(model, state, wk, base, -1, (pa, pb, s, delta, d), dt, apply)
                 if apply:
-                    _apply(model, state, wk, base, -1, delta, s, dt)
                     _book_penetration(state.acc, delta, delta / rad)
             elif apply:
                 state.vk[base] = 0.0
@@ -660,13 +786,9 @@ def segment_contacts(model, state, wk, segs, masks, dt, apply, step):
                 if apply:
                     state.vk[slot] = 0.0
                 continue
-            u_e += contact_potential(delta, model.k_fin, model.exponent)
             ncon += 1
+            u_e += _pair_contact(model, state, wk, slot, fi, (pa, pb, s, delta, dist), dt, apply)
             if apply:
-                for k in range(3):
-                    nb[k] = (pa[k] + s * (pb[k] - pa[k]) - qb[k]) / dist
-                    qb[k] += half * nb[k]  # the fin's surface point under the rope
-                _apply(model, state, wk, slot, fi, delta, s, dt)
                 _book_penetration(state.acc, delta, delta / (rad + half))
         energy += u_e
     return energy, OK, ncon

@@ -70,6 +70,11 @@ class CollideModel(NamedTuple):
     Far net: always_fast (ns,) bool, segments stepped every step whatever their clearance — the
         pieces cut during the run (``collide.adapt``), stiffer than the rest, so the far window
         stays set by the uncut rope (empty: none).
+    Line contact (``collide.contact_law = "line"``, ``contact.stiffness.line_stiffness``):
+        line_law: the linear line-load law q = k_l δ [N/m] integrated along each segment by the
+        midpoint rule on points h apart anchored at its deepest point (``kernel._line_contact``);
+        kl_body, kl_fin (nf,) [N/m²] k_l per part; line_h_body, line_h_fin (nf,) [m] the spacing h
+        per part. False: Eq. (28) once per segment at its closest point (``contact_law = "segment"``).
     """
 
     seg: np.ndarray
@@ -109,6 +114,11 @@ class CollideModel(NamedTuple):
     nose_cones: np.ndarray = np.zeros((0, 2))
     air_every: int = 1
     always_fast: np.ndarray = np.zeros(0, np.bool_)
+    line_law: bool = False
+    kl_body: float = 0.0
+    kl_fin: np.ndarray = np.zeros(0)
+    line_h_body: float = np.inf
+    line_h_fin: np.ndarray = np.zeros(0)
 
 
 class CollideState(NamedTuple):

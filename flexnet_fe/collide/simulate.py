@@ -37,14 +37,15 @@ import numpy as np
 from flexnet_fe.collide import kernel as K
 from flexnet_fe.collide.air import drag_step_ratio
 from flexnet_fe.collide import model as M
-from flexnet_fe.collide.config import CollideConfig
+from flexnet_fe.collide.config import CollideConfig, ContactLaw
 from flexnet_fe.collide.crop import (active_segments, boundary_motion, boundary_nodes, crop_reach, free_nodes,
                                      wave_speed)
 from flexnet_fe.collide.adapt import Lineage, cut_counts, cut_live, lineage_cut, lineage_start, merge_roots
 from flexnet_fe.collide.refine import refine_near_fins, split_near_path
 from flexnet_fe.collide.metrics import FinContacts, MissileHistory, collision_metrics
 from flexnet_fe.collide.scene import HeldNet, MissileStart, fin_planes, place_missile
-from flexnet_fe.collide.timestep import StepChoice, choose_step, contact_stiffness, spring_limit
+from flexnet_fe.collide.timestep import (StepChoice, choose_step, contact_stiffness, line_contact_limit,
+                                        line_density_min, line_stiffnesses, spring_limit)
 from flexnet_fe.contact.law import DAMPING_CODE, DampingModel, hysteresis_factor
 from flexnet_fe.contact.restitution import restitution_check
 from flexnet_fe.errors import FlexnetError, NumericalError
@@ -52,7 +53,7 @@ from flexnet_fe.missile.geometry import Missile
 from flexnet_fe.missile.shapes import nose_cones, pack_shapes, part_names
 from flexnet_fe.net.topology import rope_area
 from flexnet_fe.progress import progress_bar
-from flexnet_fe.frames import quat_mul, quat_to_matrix
+from flexnet_fe.frames import quat_exp_step, quat_mul, quat_to_matrix
 
 
 @dataclass(frozen=True)
@@ -103,7 +104,7 @@ ENERGY_GROWTH_SAMPLES = 3
 ENERGY_COLUMNS = ("missile_kinetic_j", "net_kinetic_j", "rope_elastic_j", "contact_stored_j", "rope_damping_j",
                   "contact_damping_j", "friction_j", "dissipated_air_j", "broken_release_j", "rope_refinement_j",
                   "gravity_work_j",
-                  "crop_boundary_work_j", "energy_balance_j")
+                  "crop_boundary_work_j", "step_term_j", "energy_balance_j")
 HISTORY_COLUMNS = (
     "t_s", "accel_body_x_mps2", "accel_body_y_mps2", "accel_body_z_mps2", "accel_mag_mps2",
     "omega_body_x_rps", "omega_body_y_rps", "omega_body_z_rps", "alpha_body_x_rps2", "alpha_body_y_rps2",
@@ -165,7 +166,6 @@ def build(net: HeldNet, missile: Missile, cfg: CollideConfig, gravity: float, lo
     local[used] = np.arange(used.size)
     seg = np.ascontiguousarray(local[model.springs[seg_idx]])
     k = np.ascontiguousarray(model.stiffness[seg_idx])
-    mass = np.array(model.mass[used], dtype=np.float64)
     reachable = free_nodes(net.x, aim, start.direction, float(start.bbox[2]))
     if not reachable.any():
         raise NumericalError("collide: no net node within the missile's footprint (check collide.aim_point)")
@@ -174,8 +174,15 @@ def build(net: HeldNet, missile: Missile, cfg: CollideConfig, gravity: float, lo
                                       missile.radius)
     n_seg = int(np.bincount(seg.ravel()).max())
     m_reach = float(model.mass[reachable].min())
+    line = cfg.contact_law is ContactLaw.line
+    kl_body, kl_fin = line_stiffnesses(cfg, rope.radius, rope.transverse_modulus, rope.poisson_ratio,
+                                       shapes.fin_half_thickness, missile.radius) if line else (0.0, np.zeros(0))
+    h_line = rope.radius / cfg.line_points_per_radius  # the line law's point spacing [m]
+    mass = np.array(model.mass[used], dtype=np.float64)
+    line_dt = (max(kl_body, float(kl_fin.max(initial=0.0))),
+               line_density_min(seg, net.x[used], mass, free_full[used])) if line else None
     step = choose_step(cfg, k, mass[seg[:, 0]], mass[seg[:, 1]], m_reach, n_seg,
-                       rope.radius, half_min, max(k_body, k_fin))
+                       rope.radius, half_min, max(k_body, k_fin), line_dt)
     g_vec = np.array([0.0, -gravity, 0.0]) if cfg.gravity else np.zeros(3)
     km = M.CollideModel(
         seg=seg, rest=np.ascontiguousarray(net.rest_length[seg_idx]), k=k,
@@ -193,20 +200,55 @@ def build(net: HeldNet, missile: Missile, cfg: CollideConfig, gravity: float, lo
         v_reg=cfg.friction_regularisation_speed, allow_tunnel=bool(cfg.allow_tunnelling), gravity=g_vec,
         air_density=float(air_density) if cfg.air else 0.0,
         diameter=np.ascontiguousarray(model.diameter[seg_idx], dtype=np.float64),
-        nose_cones=nose_cones(shapes.prof_kind, shapes.prof_data))
+        nose_cones=nose_cones(shapes.prof_kind, shapes.prof_data),
+        line_law=line, kl_body=kl_body, kl_fin=kl_fin, line_h_body=h_line,
+        line_h_fin=np.full(len(kl_fin), h_line))
     boundary = local[boundary_nodes(model.springs, free_full)]
     log.info("collide: %d of %d nodes free (crop reach %.3g m), %d of %d segments active; K_body = %.4g, "
              "K_fin = %.4g N/m^%.2g (%s, rope E_t = %.3g Pa)", int(free_full.sum()), model.n_nodes, reach,
              seg.shape[0], model.n_springs, k_body, k_fin, cfg.contact_exponent, cfg.stiffness_rule.value,
              rope.transverse_modulus)
+    if line:
+        log.info("collide: line contact law: k_l body %.4g, fins %s N/m^2 (the line integral of a rope crossing "
+                 "each part = K delta^1.5 above), points %.3g mm apart along the rope", kl_body,
+                 " ".join(f"{v:.4g}" for v in kl_fin), 1e3 * h_line)
     return Setup(km, start, used, seg_idx, free_full, boundary, reach, step, m_reach)
 
 
+STEP_TERM_EPS = 1e-3
+"""[-] shift of ``_step_term``'s central difference, as a fraction of dt (50 nm at 500 m/s and
+dt = 1e-7 s: the rope and contact energies are C¹, so its error is far below the term itself)."""
+
+
+def _step_term(km: M.CollideModel, st: M.CollideState, dt: float) -> float:
+    """The O(dt) part of the energy the kernel's step conserves [J]. A kick then a drift
+    (v += dt F(x)/m, x += dt v: symplectic Euler, ``kernel._integrate``) conserves
+    Ẽ = T + U + ½ dt v·F(x) = T + U − ½ dt dU/dt to O(dt²) — exactly, for a harmonic oscillator
+    (½ m v² + ½ k x² − ½ dt k x v) — while T + U swings by ½ dt dU/dt whenever a contact is storing
+    or giving back energy: at the line law's soft contacts, 1 % of the energy exchanged on
+    tests/collide/test_refine.py's scene at the default step, first order in dt, though nothing is
+    created. dU/dt [W]: central difference of ``kernel.energies``' rope elastic + contact stored
+    energy along the current velocities of the free nodes and the missile (translation, rotation),
+    shifted by ± STEP_TERM_EPS dt. The column ``step_term_j`` of history.csv; dt [s] the last step."""
+    if dt <= 0.0:
+        return 0.0
+    tau = STEP_TERM_EPS * dt
+    w_b = km.inv_inertia @ (quat_to_matrix(st.mq).T @ st.mh)
+    u = []
+    for sgn in (1.0, -1.0):
+        moved = st._replace(x=st.x + (sgn * tau) * np.where(km.free[:, None], st.v, 0.0),
+                            mx=st.mx + (sgn * tau) * st.mv, mq=quat_exp_step(st.mq, w_b, sgn * tau))
+        _, pe_n, pe_c = K.energies(km, moved)
+        u.append(pe_n + pe_c)
+    return -0.5 * dt * (u[0] - u[1]) / (2.0 * tau)
+
+
 def _energy_terms(km: M.CollideModel, st: M.CollideState, missile: Missile, inertia: np.ndarray,
-                  advanced: bool = True) -> dict:
+                  advanced: bool = True, dt: float = 0.0) -> dict:
     """The energy columns (without the balance) of the state [J]. ``advanced``: the state is the end
     of a successful ``kernel.advance`` call, whose contact stored energy is in acc[A_U_CONTACT] (the
-    same value as ``kernel.energies`` computes, to the last bit); otherwise it is computed."""
+    same value as ``kernel.energies`` computes, to the last bit); otherwise it is computed. dt [s]:
+    the last step, for ``step_term_j`` (0: none, the state has not been stepped)."""
     if advanced:
         ke_n, pe_n = K.net_energies(km, st)
         pe_c = float(st.acc[M.A_U_CONTACT])
@@ -219,7 +261,8 @@ def _energy_terms(km: M.CollideModel, st: M.CollideState, missile: Missile, iner
             "rope_damping_j": acc[M.A_DISS_ROPE], "contact_damping_j": acc[M.A_DISS_CONTACT],
             "friction_j": acc[M.A_DISS_FRICTION], "dissipated_air_j": acc[M.A_DISS_AIR],
             "broken_release_j": acc[M.A_BROKEN], "rope_refinement_j": acc[M.A_REFINE],
-            "gravity_work_j": acc[M.A_WORK_GRAVITY], "crop_boundary_work_j": 0.0}
+            "gravity_work_j": acc[M.A_WORK_GRAVITY], "crop_boundary_work_j": 0.0,
+            "step_term_j": _step_term(km, st, dt)}
 
 
 def _balance(e: dict) -> float:
@@ -290,7 +333,8 @@ def simulate(net: HeldNet, missile: Missile, cfg: CollideConfig, gravity: float,
     setup = build(net, missile, cfg, gravity, log, cfg.crop if crop is None else crop, air_density or 0.0)
     km, start, step = setup.model, setup.start, setup.step
     n_sub, dt = _sub_steps(cfg, step.dt * dt_scale)
-    ratio = min(far_ratio(cfg, step.dt_spring, dt), n_sub * cfg.loads_per_output)  # (windows end at outputs)
+    ratio = min(far_ratio(cfg, step.dt_spring, dt, step.dt_contact if setup.model.line_law else math.inf),
+                n_sub * cfg.loads_per_output)  # (windows end at outputs)
     n_min = max(1, round(cfg.duration / cfg.output_interval))
     n_max = max(n_min, round(cfg.end_time / cfg.output_interval))
     log.info("collide: dt = %.4g s (%s; limits: springs %.3g s, contact %.3g s, travel per step %.3g s; "
@@ -346,14 +390,26 @@ pieces' ω ∝ 1/l, the contact step ∝ √l); at this phase it was 3.9e-4 / 3.
 0.175 mm (windows 16 / 12 / 9)."""
 
 
-def far_ratio(cfg: CollideConfig, dt_spring: float, dt: float) -> int:
+FAR_CONTACT_PHASE = 1.0
+"""[rad] Largest phase ω_c × window of the line law's contact mode (ω_c = 2 / its undamped limit) in an
+automatic far-net window: the slow rope's impulse, once per window, kicks the struck nodes, and the
+impulse method resonates when the window nears half their contact period (ω_c × window = π).
+Measured on tests/collide/test_adapt.py's fin-edge scene (pieces of 0.09 mm): windows of 16 steps of
+0.4 µs (ω_c × window ≈ 16) grew the energy balance by 42 J of 73 J exchanged and stopped the run;
+single rate closed it to 0.11 %. The segment law's contact is stiffer and intermittent (it was never
+seen to resonate) and keeps the rope springs' rule alone."""
+
+
+def far_ratio(cfg: CollideConfig, dt_spring: float, dt: float, dt_contact: float = math.inf) -> int:
     """Steps per far-net window [-]: ``cfg.far_net_ratio`` when set, else the largest whole number
     of steps dt [s] in which the stiffest rope segment's axial mode (ω_max = 2 / dt_spring, dt_spring
-    [s] its stability limit, ``timestep.spring_limit``) turns by at most FAR_PHASE, at most
+    [s] its stability limit, ``timestep.spring_limit``) turns by at most FAR_PHASE and the line law's
+    contact mode (dt_contact [s] its limit; inf: none) by at most FAR_CONTACT_PHASE, at most
     FAR_RATIO_CAP."""
     if cfg.far_net_ratio:
         return int(cfg.far_net_ratio)
-    return int(max(1, math.floor(min(FAR_RATIO_CAP, FAR_PHASE * dt_spring / (2.0 * dt)))))  # (dt_spring may be inf)
+    steps = min(FAR_RATIO_CAP, FAR_PHASE * dt_spring / (2.0 * dt), FAR_CONTACT_PHASE * dt_contact / (2.0 * dt))
+    return int(max(1, math.floor(steps)))  # (dt_spring, dt_contact may be inf)
 
 
 AIR_WINDOWS_CAP = 16
@@ -550,7 +606,11 @@ def _drive(d: _Drive, n_min: int, n_max: int, snap_at: set, log) -> _Run:
                     km, st, dt, n_sub, ratio = adapted
                     d.rec.km, d.rec.st = km, st
                     wk = K.new_work(km, st)
-            apex = d.rec.sample(k, t, log)
+            if km.line_law and _line_step_short(d, km, st, dt):
+                km, dt, n_sub, ratio = _restep(d, km, st)
+                d.rec.km = km
+                wk = K.new_work(km, st)
+            apex = d.rec.sample(k, t, log, dt)
             run.n_done = k
             over = k >= n_min and interaction_over(
                 d.rec.cols["contacts"][k], d.rec.cols["apex_along_path_m"][k] - d.missile.length,
@@ -598,6 +658,18 @@ MERGE_STRAIGHT = 1.0e-3
 """… and its pieces lie within this fraction of the straight line: Σ piece chords ≤ (1 + this) ×
 the chord between the start segment's end nodes, so the merge changes the rope's elastic energy by
 at most ~2 × this × its tension × chord (booked in ``rope_refinement_j``)."""
+
+
+def _line_step_short(d: _Drive, km: M.CollideModel, st: M.CollideState, dt: float) -> bool:
+    """Has the rope stretched so far since dt [s] was chosen that the line law's contact limit is
+    below it? Its limit falls as the rope's mass per current length does (``timestep.line_density_min``),
+    so it is checked at every output from the current lengths; True: choose the step again."""
+    cfg = d.cfg
+    chi = hysteresis_factor(DAMPING_CODE[cfg.damping_model], cfg.restitution, cfg.impact_speed)
+    limit, _ = line_contact_limit(max(km.kl_body, float(km.kl_fin.max(initial=0.0))),
+                                  line_density_min(km.seg[st.alive], st.x, km.mass, km.free), cfg.impact_speed,
+                                  chi, km.rope_radius + float(km.fin_half.min(initial=0.0)))
+    return cfg.dt_safety * limit * d.dt_scale < dt
 
 
 def _adapt(d: _Drive, km: M.CollideModel, st: M.CollideState, seg: np.ndarray, chord: np.ndarray, run: _Run, log,
@@ -707,12 +779,15 @@ def _restep(d: _Drive, km: M.CollideModel, st: M.CollideState) -> tuple[M.Collid
     k_contact = max(km.k_body, km.k_fin)
     cut_in = km.mass[d.setup.used.size:]
     light = min(float(cut_in.min()), d.setup.m_reach) if cut_in.size else d.setup.m_reach
+    line = ((max(km.kl_body, float(km.kl_fin.max(initial=0.0))),
+             line_density_min(km.seg[st.alive], st.x, km.mass, km.free)) if km.line_law else None)
     new = choose_step(cfg, km.k, km.mass[km.seg[:, 0]], km.mass[km.seg[:, 1]], light,
                       int(np.bincount(km.seg.ravel()).max()), km.rope_radius,
-                      float(km.fin_half.min()), k_contact)
+                      float(km.fin_half.min()), k_contact, line)
     n_sub, dt = _sub_steps(cfg, new.dt * d.dt_scale)
     uncut = ~km.always_fast  # the pieces are stepped every step: the window is the uncut rope's
-    ratio = min(far_ratio(cfg, spring_limit(km.k[uncut], km.mass[km.seg[uncut, 0]], km.mass[km.seg[uncut, 1]]), dt),
+    ratio = min(far_ratio(cfg, spring_limit(km.k[uncut], km.mass[km.seg[uncut, 0]], km.mass[km.seg[uncut, 1]]), dt,
+                          new.dt_contact if km.line_law else math.inf),
                 n_sub * cfg.loads_per_output)
     air_ratio = _air_step_check(km, st, cfg, dt * ratio)
     km = km._replace(air_every=air_windows(air_ratio) if ratio > 1 else 1)
@@ -780,8 +855,9 @@ class _Recorder:
         g_imp = t * (self.missile.mass + km.mass[km.free].sum()) * km.gravity
         c["momentum_error_ns"][k] = float(np.linalg.norm(pm + pn + held - air - self.p0 - g_imp))
 
-    def sample(self, k, t, log) -> np.ndarray:
-        """Row k at time t [s]; returns the nose apex [m] (3,) W. Raises on a growing energy balance."""
+    def sample(self, k, t, log, dt) -> np.ndarray:
+        """Row k at time t [s] after steps of dt [s]; returns the nose apex [m] (3,) W. Raises on a
+        growing energy balance."""
         km, st, c, cfg, acc = self.km, self.st, self.cols, self.cfg, self.st.acc
         r = quat_to_matrix(st.mq)
         w_b = km.inv_inertia @ (r.T @ st.mh)
@@ -807,7 +883,7 @@ class _Recorder:
         c["max_penetration_m"][k] = acc[M.A_PEN_INT]
         c["broken_segments"][k] = acc[M.A_NBROKEN]
         self._write_momentum(k, t)
-        e = _energy_terms(km, st, self.missile, self.inertia)
+        e = _energy_terms(km, st, self.missile, self.inertia, dt=dt)
         for name, val in e.items():
             c[name][k] = val
         bal = _balance(e) - self.e0
@@ -897,6 +973,10 @@ def _summary(rec: _Recorder, setup: Setup, loads: FinLoads, x_start, dt, steps, 
         "contact_stiffness_body": km.k_body,
         "contact_stiffness_fin": km.k_fin,
         "stiffness_rule": cfg.stiffness_rule.value,
+        "contact_law": cfg.contact_law.value,
+        "line_stiffness_body": float(km.kl_body),
+        "line_stiffness_fin": [float(v) for v in km.kl_fin],
+        "line_spacing_m": float(km.line_h_body) if km.line_law else None,
         # the restitution the damping law gives an impact above the approach-speed floor
         "restitution_achieved": e_ach,
         "free_nodes": int(km.free.sum()),

@@ -15,6 +15,12 @@ dt = min(safety × dt_spring, safety × dt_contact, dt_travel) where
   ζ the contact damping ratio there;
 * dt_travel = f × min(r, h/2) / v: a point moves at most a fraction f of the thinnest contact
   layer per step.
+
+With the line law (``collide.contact_law = "line"``, ``line_stiffnesses``) the contact is a
+linear foundation k_l [N/m²] under the rope, whose stiffness on a node is at most k_l times its
+tributary length L_i: dt_contact = 2/ω_c (√(1+ζ²) − ζ) with ω_c² = k_l / min_i (m_i / L_i)
+(``line_contact_limit``, ``line_density_min``) — independent of how finely the rope is cut, and
+shorter as the rope stretches (L_i is the current length; the cuts and merges re-derive it).
 """
 
 from __future__ import annotations
@@ -26,7 +32,7 @@ import numpy as np
 
 from flexnet_fe.collide.config import CollideConfig, StiffnessRule
 from flexnet_fe.contact.law import DAMPING_CODE, hysteresis_factor
-from flexnet_fe.contact.stiffness import crossed_cylinders_stiffness, hertz_max_penetration
+from flexnet_fe.contact.stiffness import crossed_cylinders_stiffness, hertz_max_penetration, line_stiffness
 from flexnet_fe.errors import NumericalError
 
 
@@ -52,6 +58,46 @@ def contact_stiffness(cfg: CollideConfig, rope_radius: float, e_transverse: floa
             crossed_cylinders_stiffness(rope_radius, fin_half_thickness, e_star))
 
 
+def line_stiffnesses(cfg: CollideConfig, rope_radius: float, e_transverse: float, nu: float,
+                     fin_half: np.ndarray, body_radius: float) -> tuple[float, np.ndarray]:
+    """(k_l of the body [N/m²], k_l of each fin (nf,) [N/m²]) of the line law
+    (``contact.stiffness.line_stiffness``), each from its part's own Eq. (30) K (``hertz_eq30``:
+    crossed cylinders r × h/2 of that fin, r × R_body; ``given``: the case's K) and crossing
+    radius r + h/2, r + R_body."""
+    e_star = e_transverse / (1.0 - nu * nu)
+
+    def point_k(radius: float) -> float:
+        if cfg.stiffness_rule is StiffnessRule.given:
+            return float(cfg.contact_stiffness)
+        return crossed_cylinders_stiffness(rope_radius, radius, e_star)
+
+    fin = np.array([line_stiffness(point_k(h), rope_radius + h) for h in np.asarray(fin_half, float)])
+    return line_stiffness(point_k(body_radius), rope_radius + body_radius), fin
+
+
+def line_density_min(seg: np.ndarray, x: np.ndarray, mass: np.ndarray, free: np.ndarray) -> float:
+    """Smallest mass per unit of current rope length [kg/m] at a free node, m_i / L_i with L_i half
+    the current length of its segments (seg (ns, 2), x (n, 3) [m], mass (n,) [kg], free (n,) bool):
+    the line law's contact stiffness of a node is at most k_l L_i (Gershgorin on the points'
+    weights), so ω² ≤ k_l / (m_i / L_i). A stretched rope is lighter per metre: its contact is
+    faster."""
+    ell = np.linalg.norm(x[seg[:, 1]] - x[seg[:, 0]], axis=1)
+    tributary = 0.5 * (np.bincount(seg[:, 0], ell, len(mass)) + np.bincount(seg[:, 1], ell, len(mass)))
+    ok = free & (tributary > 0.0)
+    return float((mass[ok] / tributary[ok]).min()) if ok.any() else math.inf
+
+
+def line_contact_limit(k_l: float, line_density: float, speed: float, chi: float,
+                       delta_max: float) -> tuple[float, float]:
+    """(2/ω_c (√(1+ζ²) − ζ) [s], expected penetration δ_e [m]) of the line law: rope of
+    ``line_density`` [kg/m] on the linear foundation k_l [N/m²], ω_c² = k_l / line_density; δ_e =
+    speed/ω_c ≤ delta_max [m] (undamped); ζ = χ k_l δ_e / (2 √(k_l line_density)), χ [s/m]."""
+    w = math.sqrt(k_l / line_density)
+    delta = min(speed / w, delta_max)
+    zeta = 0.5 * chi * delta * w
+    return 2.0 / w * (math.sqrt(1.0 + zeta * zeta) - zeta), delta
+
+
 def spring_limit(k: np.ndarray, m_i: np.ndarray, m_j: np.ndarray) -> float:
     """2/ω_max [s] of the stiffest segment, ω² = K (1/m_i + 1/m_j); k [N/m], masses [kg]."""
     w2 = np.max(k * (1.0 / m_i + 1.0 / m_j)) if k.size else 0.0
@@ -71,16 +117,21 @@ def contact_limit(k_n: float, exponent: float, mass: float, speed: float, chi: f
 
 
 def choose_step(cfg: CollideConfig, k: np.ndarray, m_i: np.ndarray, m_j: np.ndarray, m_min: float, n_seg: int,
-                rope_radius: float, min_fin_half_thickness: float, k_contact: float) -> StepChoice:
+                rope_radius: float, min_fin_half_thickness: float, k_contact: float,
+                line: tuple[float, float] | None = None) -> StepChoice:
     """Time step (module doc). k [N/m], m_i, m_j [kg] of the active segments; m_min [kg] lightest
     node the missile can reach; n_seg most segments at a node; k_contact [N/m^m] the stiffest
-    part's K."""
+    part's K. ``line`` (line law): (largest k_l [N/m²], ``line_density_min`` [kg/m]); the contact
+    limit is then ``line_contact_limit``'s."""
     v = cfg.impact_speed
     chi = hysteresis_factor(DAMPING_CODE[cfg.damping_model], cfg.restitution, v)
     dt_spring = spring_limit(k, m_i, m_j)
     dt_travel = cfg.pass_through_fraction * min(rope_radius, min_fin_half_thickness) / v
-    dt_contact, delta = contact_limit(k_contact, cfg.contact_exponent, m_min, v, chi,
-                                      rope_radius + min_fin_half_thickness, n_seg)
+    if line is None:
+        dt_contact, delta = contact_limit(k_contact, cfg.contact_exponent, m_min, v, chi,
+                                          rope_radius + min_fin_half_thickness, n_seg)
+    else:
+        dt_contact, delta = line_contact_limit(line[0], line[1], v, chi, rope_radius + min_fin_half_thickness)
     limits = {"rope springs": cfg.dt_safety * dt_spring, "contact": cfg.dt_safety * dt_contact,
               "travel per step": dt_travel}
     governed_by = min(limits, key=limits.get)

@@ -47,3 +47,18 @@ def hertz_max_penetration(mass: float, speed: float, k_n: float, exponent: float
     with an undamped power-law contact: ½ m v² = K_n δ^(m+1)/(m+1) → δ = ((m+1) m v²/(2 K_n))^(1/(m+1)).
     For m = 1.5 this is (5 m v²/(4 K_n))^(2/5) (Hertz)."""
     return ((exponent + 1.0) * mass * speed ** 2 / (2.0 * k_n)) ** (1.0 / (exponent + 1.0))
+
+
+def line_stiffness(k_point: float, crossing_radius: float) -> float:
+    """Stiffness k_l [N/m²] of the linear line-load law q = k_l δ [N/m] whose integral along a
+    straight rope crossing a part's curved surface at right angles is the point law K δ0^1.5.
+
+    The rope's centre line passes the surface's axis of curvature (fin edge: the core edge, radius
+    R = h/2; body: its axis, R = R_body) at the distance d0 = R' − δ0, R' = r + R
+    (``crossing_radius`` [m]), so a cross-section at x along the rope penetrates
+    δ(x) = R' − √(d0² + x²) ≈ δ0 − x²/(2R') for δ0 ≪ R', and
+    ∫ k_l δ(x)₊ dx = (4√2/3) k_l √R' δ0^1.5 = K δ0^1.5  ⇔  k_l = 3 K / (4√2 √R').
+    With K of Eq. (30) for crossed cylinders (``crossed_cylinders_stiffness``) the first contact of a
+    rope with an edge or the body is the paper's Hertz law, to O(δ0/R'); a rope lying along a face
+    takes k_l δ per metre, where Eq. (30) gives no power law. k_point [N/m^1.5]."""
+    return 3.0 * k_point / (4.0 * math.sqrt(2.0) * math.sqrt(crossing_radius))

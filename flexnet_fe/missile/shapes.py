@@ -513,6 +513,24 @@ def segment_core_closest(a, b, origin, axes, poly):
 
 
 @njit(cache=True)
+def point_core_closest(p, origin, axes, poly):
+    """Closest point of a fin's core polygon to the point p [m] (3,) in B (``segment_core_closest``
+    for a point). Returns (dist [m] ≥ 0, q_u, q_v [m] fin coordinates of the closest core point):
+    the projection when it lies in the polygon, else the nearest point of its boundary."""
+    u, v, w = _to_fin(p, origin, axes)
+    if _inside_polygon(u, v, poly):
+        return abs(w), u, v
+    best, bu, bv = np.inf, u, v
+    k = poly.shape[0]
+    for i in range(k):
+        qu, qv = _closest_on_segment_2d(u, v, poly[i, 0], poly[i, 1], poly[(i + 1) % k, 0], poly[(i + 1) % k, 1])
+        d2 = (u - qu) ** 2 + (v - qv) ** 2
+        if d2 < best:
+            best, bu, bv = d2, qu, qv
+    return np.sqrt(best + w * w), bu, bv
+
+
+@njit(cache=True)
 def segment_body_closest(a, b, prof_kind, prof_data, prof_part, cutoff=np.inf):
     """Point of the segment a–b [m] (3,) in B deepest in (or nearest to) the body of revolution.
 

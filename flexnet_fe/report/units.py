@@ -49,6 +49,8 @@ KEY_UNITS: dict[str, Unit] = {
     "contact_stiffness": Unit("N/m^m (m = contact exponent)"),   # K_n of F = K_n δ^m, Eq. (28)
     "contact_stiffness_body": Unit("N/m^m (m = contact exponent)"),
     "contact_stiffness_fin": Unit("N/m^m (m = contact exponent)"),
+    "line_stiffness_body": Unit("N/m²"),             # k_l of the line law q = k_l δ [N/m]
+    "line_stiffness_fin": Unit("N/m²"),
     "static_margin_cal": Unit("calibres"),          # (x_cp − x_cg) / body diameter
     "cm_q": Unit("1/rad"),                            # pitch-damping derivative ∂C_m/∂(q d / 2V)
     "max_attitude_change_rad": Unit("mrad", 1e3),
@@ -95,7 +97,7 @@ COUNT_KEYS = frozenset({"steps", "dofs", "contacts", "snapshots", "iterations", 
 """Last key segments that are counts."""
 
 COUNT_SUFFIXES = ("_nodes", "_cells", "_segments", "_crossings", "_unresolved", "_steps", "_count", "_frames",
-                  "_windows")
+                  "_windows", "_samples")
 """Suffixes of counts (``free_nodes``, ``segment_crossings_unresolved``)."""
 
 RATIO_PATTERNS = ("_over_", "_ratio", "_fraction", "_factor", "_scale", "damage", "effectiveness",

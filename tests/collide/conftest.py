@@ -50,10 +50,11 @@ def moved(net: HeldNet, x: np.ndarray) -> HeldNet:
 
 def segment_scene(missile, a_b, b_b, v_a, v_b, *, mass=1.6e-3, k=0.0, c=0.0, rest=None, free=(True, True),
                   k_contact=1e9, damping="none", mu=0.0, rope_radius=2.25e-3, break_stretch=np.inf,
-                  allow_tunnel=False):
+                  allow_tunnel=False, k_line=0.0, line_h=None):
     """One rope segment a–b (positions [m] in the missile's body frame B, velocities [m/s]) next to
     ``missile``, which starts at rest with B = W (identity attitude, CG at cg_b). Returns
-    (CollideModel, CollideState) for ``kernel.advance``."""
+    (CollideModel, CollideState) for ``kernel.advance``. line_h [m]: the line contact law
+    with k_l = k_line [N/m²] and that point spacing on every part (None: the segment law)."""
     sh = pack_shapes(missile)
     x = np.array([a_b, b_b], dtype=float)
     rest = float(np.linalg.norm(x[1] - x[0])) if rest is None else rest
@@ -66,7 +67,9 @@ def segment_scene(missile, a_b, b_b, v_a, v_b, *, mass=1.6e-3, k=0.0, c=0.0, res
         fin_origin=sh.fin_origin, fin_axes=sh.fin_axes, fin_poly=sh.fin_poly, fin_core=sh.fin_core, fin_ncore=sh.fin_ncore, fin_half=sh.fin_half_thickness,
         fin_planes=fin_planes(sh), k_body=k_contact, k_fin=k_contact, exponent=1.5,
         damp_c=hysteresis_factor(DAMPING_CODE[damping], 0.5, 1.0), v_floor=1.0, mu=mu, v_reg=0.1,
-        allow_tunnel=allow_tunnel, gravity=np.zeros(3), nose_cones=nose_cones(sh.prof_kind, sh.prof_data))
+        allow_tunnel=allow_tunnel, gravity=np.zeros(3), nose_cones=nose_cones(sh.prof_kind, sh.prof_data),
+        line_law=line_h is not None, kl_body=k_line, kl_fin=np.full(len(sh.fin_half_thickness), k_line),
+        line_h_body=line_h or 0.0, line_h_fin=np.full(len(sh.fin_half_thickness), line_h or 0.0))
     st = M.new_state(x, 1, len(missile.fins), cg, np.zeros(3), np.array([1.0, 0.0, 0.0, 0.0]))
     st.v[0], st.v[1] = v_a, v_b
     return km, st

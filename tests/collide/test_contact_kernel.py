@@ -11,7 +11,7 @@ import pytest
 
 from flexnet_fe.collide import kernel as K
 from flexnet_fe.collide import model as M
-from flexnet_fe.contact.stiffness import crossed_cylinders_stiffness
+from flexnet_fe.contact.stiffness import crossed_cylinders_stiffness, line_stiffness
 from flexnet_fe.missile.build import build_missile
 from flexnet_fe.missile.config import MissileConfig
 
@@ -64,15 +64,17 @@ def _energy_drift(km, st, radar, scenes, dt, n_us):
     return worst / e0, final / e0
 
 
+@pytest.mark.parametrize("law", ["segment", "line"])
 @pytest.mark.parametrize("where", ["face", "edge"])
-def test_energy_closes_and_is_never_created(radar, scenes, where):
+def test_energy_closes_and_is_never_created(radar, scenes, where, law):
     # Reference: conservation of energy. A rope segment (rope springs on, the paper's rope
     # EA/l0) dropped flat on the fin face — tilted 2° so its ends land at different times — or
     # thrown broadside at the tip edge, at 50 m/s, with Lankarani–Nikravesh damping (e = 0.5)
     # and friction μ = 0.2. Kinetic + rope elastic + contact stored + dissipated must stay equal
     # to the initial kinetic energy: the error of symplectic Euler is O(dt) and bounded, so it
     # must shrink when dt is halved and never exceed 0.5 % of the energy; after the contact the
-    # balance must not have grown (no energy created).
+    # balance must not have grown (no energy created). Both contact laws (line: k_l from Eq. (30) for
+    # this contact, points r/4 to r/2 apart; tests/collide/test_line_contact.py).
     v = 50.0
     if where == "face":
         a = np.array([-1.75, 0.3, H + R + 1e-4])
@@ -84,8 +86,9 @@ def test_energy_closes_and_is_never_created(radar, scenes, where):
         va = vb = [0.0, -v, 0.0]
     errs = []
     for dt in (2e-8, 1e-8):
+        line = dict(line_h=R / 4, k_line=line_stiffness(6.7e8, R + H)) if law == "line" else {}
         km, st = scenes.segment_scene(radar, a, b, va, vb, k=318.0, c=0.01, k_contact=6.7e8,
-                                      damping="lankarani_nikravesh", mu=0.2)
+                                      damping="lankarani_nikravesh", mu=0.2, **line)
         errs.append(_energy_drift(km, st, radar, scenes, dt, 200))
         assert st.acc[M.A_DISS_CONTACT] > 0 and st.acc[M.A_FCONTACT] == 0.0  # it hit, and it has left
     assert errs[0][0] < 5e-3 and errs[1][0] < 0.6 * errs[0][0]
