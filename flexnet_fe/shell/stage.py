@@ -188,9 +188,10 @@ def load_sampling_warning(contacts: FinContacts) -> str:
                 f"docs/validation.md, \"The fin loads' time sampling\")")
     return (f"shell: the fin loads are sampled every {dt * 1e6:.3g} µs, fine enough for the peaks not to follow the "
             f"sampling (radar_traction: ≤ 7 % on the rudders from 0.3125 to 0.156 µs), but the peaks are not converged "
-            f"in the rope: they come from single strikes of the rope on the leading edges (radar_traction: rudders 2 "
-            f"and 4 +31 % and +51 % with the rope's chords halved; ±2–16 % between two collisions that differ only "
-            f"in round-off; docs/validation.md, \"The fin loads' time sampling\")")
+            f"in the rope: they come from single strikes of the rope on the leading edges (radar_traction, rope's "
+            f"chords halved: rudders 2 and 4 +31 % and +51 % with the segment contact law, up to +35 % and −18 % with "
+            f"the line law; ±2–16 % between two collisions that differ only in round-off; docs/validation.md, "
+            f"\"The fin loads' time sampling\" and \"Line contact\")")
 
 
 def fin_load_history(model: ShellModel, contacts: FinContacts, fin_index: int,
