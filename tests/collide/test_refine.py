@@ -210,8 +210,8 @@ def test_split_contact_scene_closes_energy_and_momentum(radar, log, scenes, law)
     # velocity, kernel._book_mean_velocity; the balance holds the step's O(dt) term, step_term_j,
     # simulate._step_term), second order in dt. Measured, % of the energy exchanged at dt × 1 / 0.5 /
     # 0.25: segment law 0.079 / 0.021 / 0.0056 (booked at the start velocity it was first order,
-    # 0.60 / 0.26 / 0.12); line law 0.61 / 0.21 / 0.027 (without step_term_j 0.94 / 0.50 / 0.25, first
-    # order: its softer contacts store up to 5 J here, and T + U swings by ½ dt dU/dt). So two halvings
+    # 0.60 / 0.26 / 0.12); line law 0.077 / 0.026 / 0.0034 (without step_term_j 0.40 / 0.20 / 0.096,
+    # first order: its softer contacts store up to 3.3 J here, and T + U swings by ½ dt dU/dt). So two halvings
     # must divide it by more than 8 (first order: 4; second: 16) and at dt/2 it is within
     # ENERGY_TOLERANCE (0.5 %); wing_1 still loaded, nothing tunnels. Single rate (far_net_ratio = 1):
     # the far net's windows add their own first-order error (tests/collide/test_far_net.py).
