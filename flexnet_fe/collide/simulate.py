@@ -666,10 +666,16 @@ def _line_step_short(d: _Drive, km: M.CollideModel, st: M.CollideState, dt: floa
     so it is checked at every output from the current lengths; True: choose the step again."""
     cfg = d.cfg
     chi = hysteresis_factor(DAMPING_CODE[cfg.damping_model], cfg.restitution, cfg.impact_speed)
-    limit, _ = line_contact_limit(max(km.kl_body, float(km.kl_fin.max(initial=0.0))),
-                                  line_density_min(km.seg[st.alive], st.x, km.mass, km.free), cfg.impact_speed,
-                                  chi, km.rope_radius + float(km.fin_half.min(initial=0.0)))
+    limit, _ = line_contact_limit(*_line_step_input(km, st), cfg.impact_speed, chi,
+                                  km.rope_radius + float(km.fin_half.min(initial=0.0)))
     return cfg.dt_safety * limit * d.dt_scale < dt
+
+
+def _line_step_input(km: M.CollideModel, st: M.CollideState) -> tuple[float, float]:
+    """(largest k_l [N/m²], the live rope's smallest mass per current length [kg/m]) of a line-law
+    model: what its contact limit needs (``timestep.choose_step``'s ``line``)."""
+    return (max(km.kl_body, float(km.kl_fin.max(initial=0.0))),
+            line_density_min(km.seg[st.alive], st.x, km.mass, km.free))
 
 
 def _adapt(d: _Drive, km: M.CollideModel, st: M.CollideState, seg: np.ndarray, chord: np.ndarray, run: _Run, log,
@@ -779,8 +785,7 @@ def _restep(d: _Drive, km: M.CollideModel, st: M.CollideState) -> tuple[M.Collid
     k_contact = max(km.k_body, km.k_fin)
     cut_in = km.mass[d.setup.used.size:]
     light = min(float(cut_in.min()), d.setup.m_reach) if cut_in.size else d.setup.m_reach
-    line = ((max(km.kl_body, float(km.kl_fin.max(initial=0.0))),
-             line_density_min(km.seg[st.alive], st.x, km.mass, km.free)) if km.line_law else None)
+    line = _line_step_input(km, st) if km.line_law else None
     new = choose_step(cfg, km.k, km.mass[km.seg[:, 0]], km.mass[km.seg[:, 1]], light,
                       int(np.bincount(km.seg.ravel()).max()), km.rope_radius,
                       float(km.fin_half.min()), k_contact, line)
