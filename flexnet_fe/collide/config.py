@@ -46,8 +46,12 @@ class ContactLaw(str, Enum):
              rule with points h to 2h apart, h = r / ``line_points_per_radius`` (``kernel._line_contact``);
              k_l chosen so that a straight rope crossing the part's curved surface gets Eq. (30)'s
              K δ0^1.5 (``contact.stiffness.line_stiffness``): the total force converges as the rope
-             is cut finer. Not the default yet: docs/validation.md, "Line contact", says what
-             switching needs
+             is cut finer. The default since 2026-11-28 (docs/validation.md, "Line contact as the
+             default"): at a sharp point (the radar's nose apex) or a deep edge crossing it holds
+             less energy than ``segment`` (on an edge crossed to the core k_l R'³/3 = K R'^2.5/(4√2) against
+             0.4 K R'^2.5: 0.44×), so rope bars much longer than
+             the contact stops (unsplit 5–20 cm bars at 350–500 m/s) tunnel — the run stops and
+             names the part; split or cut them (``rope_split``, ``fin_piece_length``)
     """
 
     segment = "segment"
@@ -96,7 +100,7 @@ class CollideConfig(Section):
     friction_regularisation_speed: Positive = Field(
         0.1, description="v_reg of tanh(|v_t|/v_reg) replacing sign(v_t) in Eq. (32) [m/s]")
     stiffness_rule: StiffnessRule = Field(StiffnessRule.hertz_eq30, description="rule for the contact stiffness K")
-    contact_law: ContactLaw = Field(ContactLaw.segment, description=(
+    contact_law: ContactLaw = Field(ContactLaw.line, description=(
         "'segment': Eq. (28) once per rope segment at its closest point; 'line': a line-load law integrated "
         "along the segment, which converges as the rope is cut finer (ContactLaw)"))
     line_points_per_radius: int = Field(4, ge=1, le=64, description=(

@@ -115,11 +115,13 @@ def test_air_once_per_windows_follows_air_every_window(radar, log, scenes, monke
     # one impulse, 4 × 16 steps ≈ 2.6 µs of the 1.5 ms (0.17 %): the air's work and impulse agree
     # within 3× that, 0.5 % (measured 0.11 %, 0.08 %), and the missile's Δv, which the air moves by a
     # few %, within 1e-4 (measured 3e-5).
+    # The segment law: with it this net's far windows are 16 steps; the line law's contact mode
+    # bounds them to 1 here (simulate.FAR_CONTACT_PHASE), which leaves no windows to batch.
     net = scenes.flat_net(1.6, 0.05)
-    sparse = simulate(net, radar, _impact_cfg(air=True), 9.81, log, air_density=RHO)
+    sparse = simulate(net, radar, _impact_cfg(air=True, contact_law="segment"), 9.81, log, air_density=RHO)
     assert sparse.summary["far_net_ratio"] == 16 and sparse.summary["air_every_windows"] == 4
     monkeypatch.setattr(simulate_mod, "AIR_WINDOWS_CAP", 1)
-    every = simulate(net, radar, _impact_cfg(air=True), 9.81, log, air_density=RHO)
+    every = simulate(net, radar, _impact_cfg(air=True, contact_law="segment"), 9.81, log, air_density=RHO)
     assert every.summary["air_every_windows"] == 1
     a, b = sparse.summary, every.summary
     assert a["dissipated_air_j"] == pytest.approx(b["dissipated_air_j"], rel=5e-3)

@@ -58,15 +58,18 @@ def test_segment_thrown_from_five_skins_away_in_one_call(radar, scenes):
     assert _same_state(one, st)
 
 
-def test_net_impact_in_long_calls_equals_one_step_calls(radar, log, scenes):
+@pytest.mark.parametrize("law, aim_x", [("segment", 0.0), ("line", 0.025)])
+def test_net_impact_in_long_calls_equals_one_step_calls(radar, log, scenes, law, aim_x):
     # Reference: the same impact advanced in calls of one step (the candidate list is rebuilt at
     # every step, so every segment within CANDIDATE_SKIN of touching is tested every step)
     # against calls of 400 steps (the list is rebuilt only when a node reaches its margin). A
-    # 0.4 m net hit at 500 m/s, 1 200 steps (113 mm of travel): state,
-    # contact slots, fin loads and accumulators must be bit-identical. The nose's tip is aimed at
-    # a rope (x = 0) 20 mm ahead: the first touch comes ≈ 200 steps into the first long call.
+    # 0.4 m net hit at 500 m/s, 1 200 steps (113–120 mm of travel): state,
+    # contact slots, fin loads and accumulators must be bit-identical. Segment law: the nose's tip
+    # is aimed at a rope (x = 0) 20 mm ahead, the first touch ≈ 200 steps into the first long call.
+    # Line law: aimed between two ropes (x = 0.025), the nose's flanks meet both — its tip on this
+    # unsplit 5 cm rope at 100 GPa goes through (stopped: TUNNEL, collide.config.ContactLaw).
     net = scenes.flat_net(0.4, 0.05)
-    cfg = CollideConfig(net_source="flat_taut", duration=1e-3, aim_point=(0.0, 0.02), crop=False)
+    cfg = CollideConfig(net_source="flat_taut", duration=1e-3, aim_point=(aim_x, 0.02), crop=False, contact_law=law)
     setup = build(net, radar, cfg, 9.81, log, False)
     km, s = setup.model, setup.start
     st = M.new_state(net.x[setup.used], km.seg.shape[0], km.fin_half.shape[0], s.x_cg, s.v_cg, s.q)

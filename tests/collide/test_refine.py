@@ -267,14 +267,16 @@ def test_end_rule():
 
 
 def test_run_past_duration_until_over_or_cap(radar, log, scenes):
-    # Reference: the end rule. The fin-edge scene's contact is over by ~3.5 ms with the tail past
-    # the net; with duration 1 ms and a 20 ms cap the run stops early, 'interaction_over'; with no
-    # cap it stops at the duration while the rope still touches, with a warning saying so.
+    # Reference: the end rule. The fin-edge scene's rope slides off wing_1 and the contact is over
+    # with the tail past the net at 19.7 ms (segment law) or 20.1 ms (line law; measured
+    # 2026-11-28: both 13.5 ms without friction); with duration 1 ms and a 50 ms cap the run stops
+    # early, 'interaction_over'; with no cap it stops at the duration while the rope still
+    # touches, with a warning saying so.
     base = CollideConfig(net_source="flat_taut", duration=1e-3, crop=False)
     short = simulate(_fin_edge_scene(scenes), radar, base, 9.81, log).summary
     assert short["stop_reason"] == "duration" and short["end_time_s"] == pytest.approx(1e-3)
-    ext = simulate(_fin_edge_scene(scenes), radar, base.model_copy(update={"max_duration": 0.02}), 9.81, log).summary
-    assert ext["stop_reason"] == "interaction_over" and 1e-3 < ext["end_time_s"] < 0.02
+    ext = simulate(_fin_edge_scene(scenes), radar, base.model_copy(update={"max_duration": 0.05}), 9.81, log).summary
+    assert ext["stop_reason"] == "interaction_over" and 1e-3 < ext["end_time_s"] < 0.05
     assert not any("stopped at" in w for w in ext["warnings"])
     if short["force_at_end_n"] > 0:
         assert any("still acting" in w for w in short["warnings"])
