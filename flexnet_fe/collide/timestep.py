@@ -75,13 +75,18 @@ def line_stiffnesses(cfg: CollideConfig, rope_radius: float, e_transverse: float
     return line_stiffness(point_k(body_radius), rope_radius + body_radius), fin
 
 
-def line_density_min(seg: np.ndarray, x: np.ndarray, mass: np.ndarray, free: np.ndarray) -> float:
-    """Smallest mass per unit of current rope length [kg/m] at a free node, m_i / L_i with L_i half
-    the current length of its segments (seg (ns, 2), x (n, 3) [m], mass (n,) [kg], free (n,) bool):
-    the line law's contact stiffness of a node is at most k_l L_i (Gershgorin on the points'
-    weights), so ω² ≤ k_l / (m_i / L_i). A stretched rope is lighter per metre: its contact is
-    faster."""
+def line_density_min(seg: np.ndarray, x: np.ndarray, mass: np.ndarray, free: np.ndarray,
+                     v: np.ndarray | None = None, horizon: float = 0.0) -> float:
+    """Smallest mass per unit of rope length [kg/m] at a free node, m_i / L_i with L_i half the
+    length of its segments (seg (ns, 2), x (n, 3) [m], mass (n,) [kg], free (n,) bool): the line
+    law's contact stiffness of a node is at most k_l L_i (Gershgorin on the points' weights), so
+    ω² ≤ k_l / (m_i / L_i). A stretched rope is lighter per metre: its contact is faster. With
+    velocities v (n, 3) [m/s] each length is the one it can reach within ``horizon`` [s] at its
+    ends' current relative speed, ℓ + horizon |v_j − v_i|: the step chosen from it holds until the
+    next check though the rope stretches meanwhile (a strike's own acceleration is not foreseen)."""
     ell = np.linalg.norm(x[seg[:, 1]] - x[seg[:, 0]], axis=1)
+    if v is not None and horizon > 0.0:
+        ell = ell + horizon * np.linalg.norm(v[seg[:, 1]] - v[seg[:, 0]], axis=1)
     tributary = 0.5 * (np.bincount(seg[:, 0], ell, len(mass)) + np.bincount(seg[:, 1], ell, len(mass)))
     ok = free & (tributary > 0.0)
     return float((mass[ok] / tributary[ok]).min()) if ok.any() else math.inf
