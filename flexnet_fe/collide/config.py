@@ -47,11 +47,11 @@ class ContactLaw(str, Enum):
              k_l chosen so that a straight rope crossing the part's curved surface gets Eq. (30)'s
              K δ0^1.5 (``contact.stiffness.line_stiffness``): the total force converges as the rope
              is cut finer. The default since 2026-11-28 (docs/validation.md, "Line contact as the
-             default"): at a sharp point (the radar's nose apex) or a deep edge crossing it holds
-             less energy than ``segment`` (on an edge crossed to the core k_l R'³/3 = K R'^2.5/(4√2) against
-             0.4 K R'^2.5: 0.44×), so rope bars much longer than
-             the contact stops (unsplit 5–20 cm bars at 350–500 m/s) tunnel — the run stops and
-             names the part; split or cut them (``rope_split``, ``fin_piece_length``)
+             default"). It holds less energy than ``segment`` at a sharp point (the radar's nose
+             apex) and on an edge crossed deep (to the core: k_l R'³/3 = K R'^2.5/(4√2) against
+             0.4 K R'^2.5, 0.44×), so rope bars much longer than the contact that stops them
+             (unsplit 5–20 cm bars at 350–500 m/s) tunnel — the run stops and names the part;
+             split or cut them (``rope_split``, ``fin_piece_length``)
     """
 
     segment = "segment"

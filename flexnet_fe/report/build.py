@@ -4,7 +4,7 @@ The report is built on the run-directory contract only (resolved.json, status.js
 summary.json, ``<stage>/`` files), never on a stage's internals. From the top:
 
 1. **Warnings** (red box): every warning any stage logged (:mod:`.verdict`).
-2. **Verdict**: PASS / FAIL / INCOMPLETE; per fin peak von Mises and max principal with time,
+2. **Verdict**: PASS / FAIL / UNDECIDED / INCOMPLETE; per fin peak von Mises and max principal with time,
    location, error estimate, allowable (and its source), margin of safety and PASS/FAIL; the
    missile's Δv, peak acceleration (filtered or not, said), pass-through; the flight outcome.
 3. **Pictures**: the whole missile's stress (envelope and at the largest peak), the net at

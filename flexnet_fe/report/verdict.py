@@ -14,7 +14,10 @@ shell summary's ``allowable_pa`` for that fin, or — only when the key is absen
 material's yield strength from ``resolved.json`` (``case.missile.material.yield_strength``);
 the report says which source each fin used. When the peak carries an error estimate
 (``peak_error_estimate_rel``) and ``|MS| ≤`` the estimate (σ ± its error straddles the
-allowable) the verdict is marked "within the error estimate" and a warning is raised.
+allowable) the verdict is marked "within the error estimate" and a warning is raised. The
+overall verdict is PASS only when every fin passes beyond its error estimate: a pass within it is
+UNDECIDED (the peak plus its estimated error reaches the allowable; the resolution does not decide
+it), a fail within it stays FAIL (the conservative side).
 """
 
 from __future__ import annotations
@@ -84,7 +87,7 @@ class Item:
 class Verdict:
     """What the top of the report shows."""
 
-    overall: str                      # PASS | FAIL | INCOMPLETE
+    overall: str                      # PASS | FAIL | UNDECIDED | INCOMPLETE
     overall_reason: str
     fins: tuple[FinVerdict, ...]
     missile: tuple[Item, ...]
@@ -294,9 +297,13 @@ def build_verdict(run: RunData) -> Verdict:
         overall, reason = "INCOMPLETE", f"no fin stresses (shell stage {shell.state if shell else 'absent'})"
     elif undecided or not fins:
         overall, reason = "INCOMPLETE", ("no allowable for " + ", ".join(undecided)) if undecided else "no fin loaded"
+    elif any(f.marginal for f in fins):
+        close = ", ".join(f.name for f in fins if f.marginal)
+        overall, reason = "UNDECIDED", (f"margin of safety ≥ 0 on every solved fin, but within the peak's error "
+                                        f"estimate on {close}: not decided at this resolution (see the warnings)")
     else:
         overall, reason = "PASS", "margin of safety ≥ 0 on every solved fin"
-    if overall != "INCOMPLETE" and any(f.marginal for f in fins):
+    if overall == "FAIL" and any(f.marginal for f in fins):
         reason += " (some margins lie within the error estimate: see the warnings)"
     interval = _num(shell.section.get("load_sample_interval_s")) if shell and shell.complete else None
     if overall != "INCOMPLETE" and interval is not None:

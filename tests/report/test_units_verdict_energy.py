@@ -219,3 +219,28 @@ def test_the_verdict_names_the_load_sampling_its_peaks_depend_on(tmp_path):
     v = build_verdict(read_run(run))
     assert "0.312 µs sampling" in v.overall_reason and "not converged in the rope" in v.overall_reason
     assert "under-estimates" not in v.overall_reason
+
+
+def test_a_pass_within_the_error_estimate_is_undecided(tmp_path):
+    """Reference: the margin of safety's definition. σ = 450 MPa against 503 MPa is MS = +0.118; with
+    a 20 % error estimate σ (1 + 0.2) = 540 MPa exceeds the allowable, so the pass is not decided —
+    the banner says UNDECIDED and names the fin; with a 5 % estimate (472 MPa) it is a PASS; a fin
+    failing within its estimate (560 MPa, MS = −0.10, 20 %) keeps the banner at FAIL."""
+    from flexnet_fe.io import atomic_write_json
+    from flexnet_fe.report.rundir import read_run
+    from flexnet_fe.report.verdict import build_verdict
+
+    run = tmp_path / "run"
+    atomic_write_json(run / "resolved.json", {"case": {"case": {"name": "n", "stages": ["shell"]}}})
+    atomic_write_json(run / "status.json", {"case": "n", "stages": {"shell": {"state": "done"}}})
+    safe = {"peak_von_mises_pa": 1e8, "allowable_pa": 5.03e8, "peak_error_estimate_rel": 0.2}
+    for close, err, fail, overall in ((4.5e8, 0.2, None, "UNDECIDED"), (4.5e8, 0.05, None, "PASS"),
+                                      (4.5e8, 0.2, 5.6e8, "FAIL")):
+        fins = {"wing_1": safe, "rudder_2": {"peak_von_mises_pa": close, "allowable_pa": 5.03e8,
+                                             "peak_error_estimate_rel": err}}
+        if fail:
+            fins["rudder_3"] = {"peak_von_mises_pa": fail, "allowable_pa": 5.03e8, "peak_error_estimate_rel": 0.2}
+        atomic_write_json(run / "summary.json", {"shell": fins})
+        v = build_verdict(read_run(run))
+        assert v.overall == overall, (close, err, fail)
+        assert ("rudder_2" in v.overall_reason) is (overall == "UNDECIDED")
