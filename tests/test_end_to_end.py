@@ -88,7 +88,7 @@ def test_default_case_whole_chain(tmp_path):
     out = tmp_path / "run"
     env = dict(os.environ, FLEXNET_NO_PROGRESS="1")
     # The case as shipped resolves the ropes near the path (rope_split 8), the rope at the fins
-    # (fin_piece_length 0.7 mm) and the fins at the contacts (1.25 mm): minutes on the CI machine.
+    # (fin_piece_length 1.4 mm) and the fins at the contacts (1.25 mm): minutes on the CI machine.
     # This test checks the chain and its contract,
     # not the resolution (verified by the convergence benchmarks, docs/validation.md), so it runs
     # the deployed rope and a 10 mm local fin mesh: ≈ 1 min.
