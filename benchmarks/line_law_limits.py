@@ -8,9 +8,9 @@ more resolution than the per-segment law, measured side by side in one process
 2. ``quick``: the quick collide study's scene (2 m net, 20 cm bars) uncut and with the rope cut to 2 cm
    at the fins (``study.scenes.COARSE_FIN_CUT``): penetration / (r + h), Δv/v, CPU.
 3. ``strike``: tests/collide/test_adapt.py's fin-edge scene cut to the edge limit, run to 8 ms (its rope
-   meets rudder_1 at ≈ 7 ms): the energy balance against dt_safety, with the line law's step taken
-   from the segment lengths reached by the next output (as shipped) and from the current ones
-   (``--horizon 0`` replaces ``simulate._line_step_input``'s horizon by 0: the former rule).
+   meets rudder_1 at ≈ 7 ms): the energy balance against dt_safety. (Until 2026-11-28 the line law was
+   per metre of current length and this part also compared two rules for its step; the rows of that
+   day with a ``horizon`` key are those, docs/validation.md.)
 
     PYTHONPATH=.:tests/collide .venv/bin/python benchmarks/line_law_limits.py OUT.jsonl [apex quick strike]
 
@@ -94,7 +94,7 @@ def quick(out):
                      cpu_s=time.process_time() - c0)
 
 
-def strike(out, horizons=(None, 0.0)):
+def strike(out):
     import conftest as C  # tests/collide/conftest.py (on PYTHONPATH)
 
     from flexnet_fe.collide import simulate as S
@@ -108,24 +108,20 @@ def strike(out, horizons=(None, 0.0)):
     radar = build_missile(MissileConfig(preset="radar"))
     scenes = types.SimpleNamespace(flat_net=C.flat_net, moved=C.moved)
     limit = (2.25e-3 + 2.0e-3) / 3
-    shipped = S._line_step_input
     for law in ("line", "segment"):
-        for horizon in (horizons if law == "line" else (None,)):
-            S._line_step_input = shipped if horizon is None else (lambda km, st, h, f=shipped, hz=horizon: f(km, st, hz))
-            for safety in (0.5, 0.4, 0.25):
-                cfg = CollideConfig(net_source="flat_taut", duration=8e-3, crop=False, fin_piece_length=limit,
-                                    fin_piece_chord=limit, fin_split_margin=0.03, contact_law=law, dt_safety=safety)
-                c0 = time.process_time()
-                r = S.simulate(_fin_edge_scene(scenes), radar, cfg, 9.81, LOG)
-                s, h = r.summary, r.history
-                jump = np.diff(h["energy_balance_j"])
-                k = int(np.argmax(np.abs(jump)))
-                _row(out, part="strike", law=law, horizon="next output" if horizon is None else horizon,
-                     dt_safety=safety, energy_error_rel=s["energy_error_rel"], dt_s=s["dt_s"], steps=s["steps"],
-                     worst_jump_j=float(jump[k]), worst_jump_t_s=float(h["t_s"][k + 1]),
-                     rudder_1_ns=s["fin_impulse_ns"]["rudder_1"], wing_1_ns=s["fin_impulse_ns"]["wing_1"],
-                     cpu_s=time.process_time() - c0)
-    S._line_step_input = shipped
+        for safety in (0.5, 0.4, 0.25):
+            cfg = CollideConfig(net_source="flat_taut", duration=8e-3, crop=False, fin_piece_length=limit,
+                                fin_piece_chord=limit, fin_split_margin=0.03, contact_law=law, dt_safety=safety)
+            c0 = time.process_time()
+            r = S.simulate(_fin_edge_scene(scenes), radar, cfg, 9.81, LOG)
+            s, h = r.summary, r.history
+            jump = np.diff(h["energy_balance_j"])
+            k = int(np.argmax(np.abs(jump)))
+            _row(out, part="strike", law=law, line_per="rest length", dt_safety=safety,
+                 energy_error_rel=s["energy_error_rel"], dt_s=s["dt_s"], steps=s["steps"],
+                 worst_jump_j=float(jump[k]), worst_jump_t_s=float(h["t_s"][k + 1]),
+                 rudder_1_ns=s["fin_impulse_ns"]["rudder_1"], wing_1_ns=s["fin_impulse_ns"]["wing_1"],
+                 cpu_s=time.process_time() - c0)
 
 
 def main() -> None:

@@ -42,11 +42,12 @@ class ContactLaw(str, Enum):
              per segment, so the total force of a rope pressed on a part at a given depth grows
              with the number of segments in contact — ×2.0 / 3.0 / 5.0 at 1.4 / 0.7 / 0.35 mm
              chords for a rope crossing a fin edge 0.2 mm deep (docs/validation.md, "Line contact")
-    line     the linear line-load law q = k_l δ [N/m] integrated along each segment by a midpoint
-             rule with points h to 2h apart, h = r / ``line_points_per_radius`` (``kernel._line_contact``);
-             k_l chosen so that a straight rope crossing the part's curved surface gets Eq. (30)'s
-             K δ0^1.5 (``contact.stiffness.line_stiffness``): the total force converges as the rope
-             is cut finer. The default since 2026-11-28 (docs/validation.md, "Line contact as the
+    line     the linear line-load law q = k_l δ [N per metre of rest length] integrated along each
+             segment by a midpoint rule with points h to 2h apart, h = r / ``line_points_per_radius``
+             (``kernel._line_contact``); k_l chosen so that a straight unstretched rope crossing the
+             part's curved surface gets Eq. (30)'s K δ0^1.5 (``contact.stiffness.line_stiffness``;
+             stretched s×, K δ0^1.5 / s, as its mass per length): the total force converges as the
+             rope is cut finer. The default since 2026-11-28 (docs/validation.md, "Line contact as the
              default"). It holds less energy than ``segment`` at a sharp point (the radar's nose
              apex) and on an edge crossed deep (to the core: k_l R'³/3 = K R'^2.5/(4√2) against
              0.4 K R'^2.5, 0.44×), so rope bars much longer than the contact that stops them

@@ -518,7 +518,7 @@ def _apply(model, state, wk, slot, fin, pt, dt, law):
     s): penetration [m] > 0 and segment parameter of the point; wk.nb (3,) unit normal (towards the
     rope) and wk.qb [m] (3,) missile contact point, in B; law = (kk, expo, wstick): the point's
     stiffness [N/m^expo] and exponent (segment law: K of the part, m; line law: k_l × the point's
-    length, 1) and its share (0, 1] of the segment's discrete-stick friction cap. Adds the force to
+    rest length, 1) and its share (0, 1] of the segment's discrete-stick friction cap. Adds the force to
     wk.f (weights 1 − s, s on the segment's nodes) and its reaction to wk.fmt (missile force,
     torque about the CG, W); books the dissipation; fin ≥ 0: adds the impulse to the fin-load
     slot. Returns |F| [N]."""
@@ -606,18 +606,23 @@ def _point_depth(model, wk, fin, p0, p1, p2):
 def _line_grid(model, state, wk, slot, fin, geo, dt, apply):
     """One midpoint rule of ``_line_contact``: geo = (pa, pb, s*, n, weight) — the segment's ends [m]
     (3,) in B, the parameter of its deepest point, the number of cells n (points s_q = (q + ½)/n, each
-    of length ℓ/n) and the rule's weight in the blend. Points are taken from the cell holding s*
+    of length ℓ/n) and the rule's weight in the blend. Points are taken from the two nearest s*
     outwards until δ ≤ 0 (δ is concave along the segment: convex parts). With ``apply`` each point
-    with δ_q > 0 gets ``_apply`` with the stiffness weight × k_l ℓ/n, exponent 1 and weight/n of the
-    segment's stick cap. Returns (U_n = Σ_q ½ k_l (ℓ/n) δ_q² [J], whether a point touched)."""
+    with δ_q > 0 gets ``_apply`` with the stiffness weight × k_l ℓ0/n (ℓ0 the segment's rest length),
+    exponent 1 and weight/n of the segment's stick cap. Returns (U_n = Σ_q ½ k_l (ℓ0/n) δ_q² [J],
+    whether a point touched)."""
     pa, pb, s_star, n, weight = geo
     t0, t1, t2 = pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2]
-    kq = (model.kl_fin[fin] if fin >= 0 else model.kl_body) * np.sqrt(t0 * t0 + t1 * t1 + t2 * t2) / n
+    kq = (model.kl_fin[fin] if fin >= 0 else model.kl_body) * model.rest[slot // (model.fin_half.shape[0] + 1)] / n
     energy = 0.0
     touched = False
-    qc = min(int(s_star * n), n - 1)
+    # δ is concave along the segment with its maximum at s*, so it falls monotonically from s* in
+    # each direction: walk each side from the point nearest s* on that side (qr: the first point at
+    # or past s*) and stop at the first point out of contact. (Walking from the cell holding s* missed
+    # the points beyond a first point on the wrong side of s* that was out of contact: U jumped.)
+    qr = min(max(int(np.ceil(s_star * n - 0.5)), 0), n)
     for step in (1, -1):
-        q = qc if step == 1 else qc - 1
+        q = qr if step == 1 else qr - 1
         while 0 <= q < n:
             s = (q + 0.5) / n
             delta = _point_depth(model, wk, fin, pa[0] + s * t0, pa[1] + s * t1, pa[2] + s * t2)
@@ -637,17 +642,25 @@ def _line_contact(model, state, wk, slot, fin, seg_pt, dt, apply):
     (``contact.stiffness.line_stiffness``); seg_pt = (pa, pb, s*): its ends [m] (3,) in B and the
     parameter of its point deepest in the part.
 
-    The stored energy is the line integral U = ∫ ½ k_l δ(x)² dl along the segment's current length
-    ℓ, δ(x) the penetration of the rope's cross-section at x, by the composite midpoint rule U_n on
-    n cells of length ℓ/n (``_line_grid``). Points at most 2h apart resolve any contact wider than
-    that (h = model.line_h_*), so n follows the length: with m = ℓ/h, n = max(1, ⌊m⌋) and
+    The stored energy is the integral over the rope's material, U = ∫ ½ k_l δ² dl0: k_l per unit of
+    rest length ℓ0, δ the penetration of the rope's cross-section, taken along the segment's
+    current chord by the composite midpoint rule U_n on n cells (``_line_grid``), each carrying ℓ0/n
+    of rope. Points at most 2h apart in space resolve any contact wider than that (h =
+    model.line_h_*), so n follows the current length ℓ: with m = ℓ/h, n = max(1, ⌊m⌋) and
     U = (1 − α) U_n + α U_{n+1}, α = m − n ∈ [0, 1) (0 below m = 1): continuous as ℓ crosses a
     whole number of h, so the potential never jumps. The forces are its exact gradient: each rule's
-    points (weights 1 − α, α) by the envelope theorem, plus along the segment the length
-    derivative ((1 − α) U_n + α U_{n+1})/ℓ + (U_{n+1} − U_n)/h, which pulls the two ends together
-    (U grows with the length of rope pressed in). Unlike Eq. (28) applied once per segment, the
-    total force of a rope on a part does not grow as the rope is cut finer: it converges to the
-    integral (a rope crossing an edge: K δ0^1.5 of Eq. (30), ``line_stiffness``).
+    points (weights 1 − α, α) by the envelope theorem, plus along the segment the blend's length
+    derivative (U_{n+1} − U_n)/h (the two rules' difference: small). Unlike Eq. (28) applied once per
+    segment, the total force of a rope on a part does not grow as the rope is cut finer: it
+    converges to the integral (an unstretched rope crossing an edge: K δ0^1.5 of Eq. (30),
+    ``line_stiffness``; stretched s×, K δ0^1.5 / s, as its mass per length).
+    Per unit of rest length, not of current length (until 2026-11-28): U per current length grew
+    by ½ k_l δ² per metre the pressed rope stretched, an axial force that at δ = 1 mm (2.7 kN)
+    dwarfs the paper rope's E A = 16 N and crushed pressed pieces to micrometres, where its
+    direction flips; a rope bundle striking a rudder then created 12 % of the energy exchanged at
+    the case's step (benchmarks/strike_convergence.py; 0.02 % now). Per rest length, each
+    material element of rope meets the part as an unstretched one would (its ω² = k_l / ρA), so
+    the contact limit of the step does not move as the rope stretches.
     Returns the stored energy U [J]; with ``apply``, the slot's approach speed is reset when no
     point touches."""
     pa, pb, s_star = seg_pt
@@ -669,7 +682,7 @@ def _line_contact(model, state, wk, slot, fin, seg_pt, dt, apply):
         else:
             u_n = u
     if apply:
-        g = ((1.0 - alpha) * u_n + alpha * u_m) / ell + (u_m - u_n) * m / ell if alpha > 0.0 else u_n / ell
+        g = (u_m - u_n) * m / ell if alpha > 0.0 else 0.0
         tw0, tw1, tw2 = _rv(wk.r, t0 / ell, t1 / ell, t2 / ell)
         e = slot // (model.fin_half.shape[0] + 1)
         _apply_to_node(model.free, state.acc, wk.f, model.seg[e, 0], g, (tw0, tw1, tw2), dt)

@@ -44,7 +44,7 @@ from flexnet_fe.collide.adapt import Lineage, cut_counts, cut_live, lineage_cut,
 from flexnet_fe.collide.refine import refine_near_fins, split_near_path
 from flexnet_fe.collide.metrics import FinContacts, MissileHistory, collision_metrics
 from flexnet_fe.collide.scene import HeldNet, MissileStart, fin_planes, place_missile
-from flexnet_fe.collide.timestep import (StepChoice, choose_step, contact_stiffness, line_contact_limit,
+from flexnet_fe.collide.timestep import (StepChoice, choose_step, contact_stiffness,
                                         line_density_min, line_stiffnesses, spring_limit)
 from flexnet_fe.contact.law import DAMPING_CODE, DampingModel, hysteresis_factor
 from flexnet_fe.contact.restitution import restitution_check
@@ -180,7 +180,7 @@ def build(net: HeldNet, missile: Missile, cfg: CollideConfig, gravity: float, lo
     h_line = rope.radius / cfg.line_points_per_radius  # the line law's point spacing [m]
     mass = np.array(model.mass[used], dtype=np.float64)
     line_dt = (max(kl_body, float(kl_fin.max(initial=0.0))),
-               line_density_min(seg, net.x[used], mass, free_full[used])) if line else None
+               line_density_min(seg, net.rest_length[seg_idx], mass, free_full[used])) if line else None
     step = choose_step(cfg, k, mass[seg[:, 0]], mass[seg[:, 1]], m_reach, n_seg,
                        rope.radius, half_min, max(k_body, k_fin), line_dt)
     g_vec = np.array([0.0, -gravity, 0.0]) if cfg.gravity else np.zeros(3)
@@ -606,10 +606,6 @@ def _drive(d: _Drive, n_min: int, n_max: int, snap_at: set, log) -> _Run:
                     km, st, dt, n_sub, ratio = adapted
                     d.rec.km, d.rec.st = km, st
                     wk = K.new_work(km, st)
-            if km.line_law and _line_step_short(d, km, st, dt):
-                km, dt, n_sub, ratio = _restep(d, km, st)
-                d.rec.km = km
-                wk = K.new_work(km, st)
             apex = d.rec.sample(k, t, log, dt)
             run.n_done = k
             over = k >= n_min and interaction_over(
@@ -660,27 +656,13 @@ the chord between the start segment's end nodes, so the merge changes the rope's
 at most ~2 × this × its tension × chord (booked in ``rope_refinement_j``)."""
 
 
-def _line_step_short(d: _Drive, km: M.CollideModel, st: M.CollideState, dt: float) -> bool:
-    """Will the rope stretch so far before the next output that the line law's contact limit falls
-    below dt [s]? Its limit falls as the rope's mass per length does (``timestep.line_density_min``),
-    so it is checked at every output from the lengths the segments reach by the next one
-    (``_line_step_input``); True: choose the step again."""
-    cfg = d.cfg
-    chi = hysteresis_factor(DAMPING_CODE[cfg.damping_model], cfg.restitution, cfg.impact_speed)
-    limit, _ = line_contact_limit(*_line_step_input(km, st, cfg.output_interval), cfg.impact_speed, chi,
-                                  km.rope_radius + float(km.fin_half.min(initial=0.0)))
-    return cfg.dt_safety * limit * d.dt_scale < dt
-
-
-def _line_step_input(km: M.CollideModel, st: M.CollideState, horizon: float) -> tuple[float, float]:
-    """(largest k_l [N/m²], the live rope's smallest mass per length [kg/m]) of a line-law model: what
-    its contact limit needs (``timestep.choose_step``'s ``line``), each segment's length taken as the
-    one it reaches within ``horizon`` [s] (the next check) at its ends' current relative speed.
-    With the current lengths alone the step lagged the stretch by up to an output interval: on
-    tests/collide/test_adapt.py's fin-edge scene its rope's strike on rudder_1 created 1.57 % of the
-    energy exchanged (0.098 % with the horizon; docs/validation.md, "Line contact as the default")."""
+def _line_step_input(km: M.CollideModel, st: M.CollideState) -> tuple[float, float]:
+    """(largest k_l [N/m²], the live rope's smallest mass per rest length [kg/m]) of a line-law model:
+    what its contact limit needs (``timestep.choose_step``'s ``line``). With the rest lengths the
+    limit does not change as the rope stretches (``timestep.line_density_min``), so it is chosen
+    again only when a cut or merge changes the model (``_restep``)."""
     return (max(km.kl_body, float(km.kl_fin.max(initial=0.0))),
-            line_density_min(km.seg[st.alive], st.x, km.mass, km.free, st.v, horizon))
+            line_density_min(km.seg[st.alive], km.rest[st.alive], km.mass, km.free))
 
 
 def _adapt(d: _Drive, km: M.CollideModel, st: M.CollideState, seg: np.ndarray, chord: np.ndarray, run: _Run, log,
@@ -790,7 +772,7 @@ def _restep(d: _Drive, km: M.CollideModel, st: M.CollideState) -> tuple[M.Collid
     k_contact = max(km.k_body, km.k_fin)
     cut_in = km.mass[d.setup.used.size:]
     light = min(float(cut_in.min()), d.setup.m_reach) if cut_in.size else d.setup.m_reach
-    line = _line_step_input(km, st, cfg.output_interval) if km.line_law else None
+    line = _line_step_input(km, st) if km.line_law else None
     new = choose_step(cfg, km.k, km.mass[km.seg[:, 0]], km.mass[km.seg[:, 1]], light,
                       int(np.bincount(km.seg.ravel()).max()), km.rope_radius,
                       float(km.fin_half.min()), k_contact, line)

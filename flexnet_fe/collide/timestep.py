@@ -17,10 +17,11 @@ dt = min(safety × dt_spring, safety × dt_contact, dt_travel) where
   layer per step.
 
 With the line law (``collide.contact_law = "line"``, ``line_stiffnesses``) the contact is a
-linear foundation k_l [N/m²] under the rope, whose stiffness on a node is at most k_l times its
-tributary length L_i: dt_contact = 2/ω_c (√(1+ζ²) − ζ) with ω_c² = k_l / min_i (m_i / L_i)
-(``line_contact_limit``, ``line_density_min``) — independent of how finely the rope is cut, and
-shorter as the rope stretches (L_i is the current length; the cuts and merges re-derive it).
+linear foundation k_l [N/m²] per unit of the rope's rest (material) length, whose stiffness on a
+node is at most k_l times its tributary rest length L0_i: dt_contact = 2/ω_c (√(1+ζ²) − ζ) with
+ω_c² = k_l / min_i (m_i / L0_i) (``line_contact_limit``, ``line_density_min``) — independent of how
+finely the rope is cut and of how far it is stretched (m_i / L0_i is the rope's ρA at every
+interior node; cuts and merges keep it).
 """
 
 from __future__ import annotations
@@ -75,19 +76,12 @@ def line_stiffnesses(cfg: CollideConfig, rope_radius: float, e_transverse: float
     return line_stiffness(point_k(body_radius), rope_radius + body_radius), fin
 
 
-def line_density_min(seg: np.ndarray, x: np.ndarray, mass: np.ndarray, free: np.ndarray,
-                     v: np.ndarray | None = None, horizon: float = 0.0) -> float:
-    """Smallest mass per unit of rope length [kg/m] at a free node, m_i / L_i with L_i half the
-    length of its segments (seg (ns, 2), x (n, 3) [m], mass (n,) [kg], free (n,) bool): the line
-    law's contact stiffness of a node is at most k_l L_i (Gershgorin on the points' weights), so
-    ω² ≤ k_l / (m_i / L_i). A stretched rope is lighter per metre: its contact is faster. With
-    velocities v (n, 3) [m/s] each length is the one it can reach within ``horizon`` [s] at its
-    ends' current relative speed, ℓ + horizon |v_j − v_i|: the step chosen from it holds until the
-    next check though the rope stretches meanwhile (a strike's own acceleration is not foreseen)."""
-    ell = np.linalg.norm(x[seg[:, 1]] - x[seg[:, 0]], axis=1)
-    if v is not None and horizon > 0.0:
-        ell = ell + horizon * np.linalg.norm(v[seg[:, 1]] - v[seg[:, 0]], axis=1)
-    tributary = 0.5 * (np.bincount(seg[:, 0], ell, len(mass)) + np.bincount(seg[:, 1], ell, len(mass)))
+def line_density_min(seg: np.ndarray, rest: np.ndarray, mass: np.ndarray, free: np.ndarray) -> float:
+    """Smallest mass per unit of rest (material) length [kg/m] at a free node, m_i / L0_i with L0_i
+    half the rest length of its segments (seg (ns, 2), rest (ns,) [m], mass (n,) [kg], free (n,)
+    bool): the line law's contact stiffness of a node is at most k_l L0_i (Gershgorin on the points'
+    weights, ``kernel._line_grid``), so ω² ≤ k_l / (m_i / L0_i) however far the rope is stretched."""
+    tributary = 0.5 * (np.bincount(seg[:, 0], rest, len(mass)) + np.bincount(seg[:, 1], rest, len(mass)))
     ok = free & (tributary > 0.0)
     return float((mass[ok] / tributary[ok]).min()) if ok.any() else math.inf
 

@@ -60,5 +60,7 @@ def line_stiffness(k_point: float, crossing_radius: float) -> float:
     ∫ k_l δ(x)₊ dx = (4√2/3) k_l √R' δ0^1.5 = K δ0^1.5  ⇔  k_l = 3 K / (4√2 √R').
     With K of Eq. (30) for crossed cylinders (``crossed_cylinders_stiffness``) the first contact of a
     rope with an edge or the body is the paper's Hertz law, to O(δ0/R'); a rope lying along a face
-    takes k_l δ per metre, where Eq. (30) gives no power law. k_point [N/m^1.5]."""
+    takes k_l δ per metre, where Eq. (30) gives no power law. The collision applies k_l per metre of
+    the rope's rest length (``collide.kernel._line_contact``): a rope stretched s× presses with
+    k_l δ / s per metre of its current length, as its mass per metre is 1/s. k_point [N/m^1.5]."""
     return 3.0 * k_point / (4.0 * math.sqrt(2.0) * math.sqrt(crossing_radius))

@@ -311,7 +311,7 @@ def build_verdict(run: RunData) -> Verdict:
         # still follow the rope's discretisation
         if shell.section.get("load_sampling_resolved"):
             reason += (f", at the fin loads' {interval * 1e6:.3g} µs sampling; the peaks are not converged in "
-                       "the rope's discretisation (see the warnings)")
+                       "the rope's discretisation and follow its transverse stiffness (see the warnings)")
         else:
             reason += (f", at the fin loads' {interval * 1e6:.3g} µs sampling, which under-estimates the peaks "
                        "(see the warnings)")

@@ -26,16 +26,17 @@ H_LINE = R / 4  # the line law's point spacing of the cases (collide.line_points
 
 
 def chain_scene(missile, x, v, *, line_h, mass_per_length=1.59e-2, k_rope=0.0, k_contact=K_FIN,
-                damping="none"):
+                damping="none", stretch=1.0, rest=None):
     """A straight chain of rope segments through the points x (n, 3) [m] (B = W, missile at rest),
     velocities v (3,) [m/s], node masses from ``mass_per_length`` [kg/m] (the paper's rope: ρ = 1000
-    kg/m³, d = 4.5 mm), rope axial stiffness EA/l0 ``k_rope`` per metre [N] (0: no rope force).
+    kg/m³, d = 4.5 mm) per metre of rest length, each segment's rest length ``rest`` [m] (n − 1,) or its chord / ``stretch``,
+    rope axial stiffness EA/l0 ``k_rope`` per metre [N] (0: no rope force).
     line_h: the line law's point spacing [m], or None: the segment law with K = k_contact."""
     from flexnet_fe.contact.law import DAMPING_CODE, hysteresis_factor
     sh = pack_shapes(missile)
     n = len(x)
     seg = np.stack([np.arange(n - 1), np.arange(1, n)], axis=1).astype(np.int64)
-    ell = np.linalg.norm(np.diff(x, axis=0), axis=1)
+    ell = np.linalg.norm(np.diff(x, axis=0), axis=1) / stretch if rest is None else np.asarray(rest, float)
     mass = np.zeros(n)
     mass[:-1] += 0.5 * ell * mass_per_length
     mass[1:] += 0.5 * ell * mass_per_length
@@ -110,18 +111,20 @@ def test_segment_law_stiffens_as_the_rope_is_cut_finer(radar):
     assert ratios[0] > 1.8 and ratios[1] > 1.4 * ratios[0] and ratios[2] > 1.5 * ratios[1]
 
 
-def test_line_forces_are_the_gradient_of_the_stored_energy(radar):
+@pytest.mark.parametrize("stretch", [1.0, 3.0])
+def test_line_forces_are_the_gradient_of_the_stored_energy(radar, stretch):
     # Reference: the potential itself. With no damping, friction or rope force, one step of
     # symplectic Euler changes each free node's velocity by F dt / m, and F must be −∂U/∂x of the
     # stored energy U (kernel.energies), the length terms of the blended rule included:
     # central differences of U with a 1e-9 m step, error O(1e-9 / 1e-4)² of the force. A rope
     # crossing the tip edge obliquely and bent (so the points' normals and the segments' lengths
-    # all differ). The missile takes the opposite of the contact forces: momentum is exact.
+    # all differ), unstretched and stretched 3× (rest length = chord / 3). The missile takes the
+    # opposite of the contact forces: momentum is exact.
     rng = np.random.default_rng(3)
     x = crossing(0.7e-3, 0.37, 0.25e-3, half_length=3e-3)
     x[:, 0] += 0.4 * (x[:, 2] - x[0, 2])  # oblique
     x += rng.normal(0.0, 3e-5, x.shape)
-    km, st = chain_scene(radar, x, 0.0, line_h=H_LINE)
+    km, st = chain_scene(radar, x, 0.0, line_h=H_LINE, stretch=stretch)
     u0 = K.energies(km, st)[2]
     assert u0 > 0.0
     grad = np.zeros_like(x)
@@ -131,7 +134,7 @@ def test_line_forces_are_the_gradient_of_the_stored_energy(radar):
             for sgn in (1.0, -1.0):
                 xp = x.copy()
                 xp[i, c] += sgn * h
-                kp, sp = chain_scene(radar, xp, 0.0, line_h=H_LINE)
+                kp, sp = chain_scene(radar, xp, 0.0, line_h=H_LINE, rest=km.rest)  # the same rope, moved
                 grad[i, c] += sgn * K.energies(kp, sp)[2] / (2 * h)
     dt = 1e-12
     assert K.advance(km, st, 1, dt) == M.OK
@@ -140,6 +143,29 @@ def test_line_forces_are_the_gradient_of_the_stored_energy(radar):
     np.testing.assert_allclose(force, -grad, atol=1e-5 * scale)
     p_missile = float(km.m_mass) * st.mv
     np.testing.assert_allclose(p_missile, -(force.sum(axis=0)) * dt, rtol=1e-9, atol=1e-12 * scale * dt)
+
+
+@pytest.mark.parametrize("stretch", [1.0, 3.0, 20.0])
+def test_a_pressed_rope_is_not_pulled_along_itself(radar, stretch):
+    # Reference: closed form. A straight rope lying along wing_1's face 0.1 mm deep (x_b from −1.75
+    # to −1.65 m at y_b = 0.3015 m, inside the planform; 10 pieces) has the uniform penetration δ
+    # everywhere, so the line law stores U = ½ k_l L0 δ² with L0 its rest length (the law is per
+    # metre of rest length; the midpoint rule is exact for a constant) and pushes it out along the
+    # face normal with k_l L0 δ, nothing along the rope: stretching a rope whose material is already
+    # pressed in presses no more material. (Per metre of current length the ends were pulled in by
+    # ½ k_l δ² = 27.5 N each, more than the paper rope's E A = 15.9 N: the pressed pieces were
+    # crushed, kernel._line_contact.)
+    delta = 1e-4
+    xs = np.linspace(-1.75, -1.65, 11)
+    x = np.stack([xs, np.full_like(xs, 0.3015), np.full_like(xs, H + R - delta)], axis=1)
+    km, st = chain_scene(radar, x, 0.0, line_h=H_LINE, stretch=stretch)
+    u = K.energies(km, st)[2]
+    assert u == pytest.approx(0.5 * K_LINE * km.rest.sum() * delta ** 2, rel=1e-9)
+    dt = 1e-12
+    assert K.advance(km, st, 1, dt) == M.OK
+    force = st.v * km.mass[:, None] / dt
+    assert force[:, 2].sum() == pytest.approx(K_LINE * km.rest.sum() * delta, rel=1e-6)
+    assert np.abs(force[:, :2]).max() < 1e-9 * force[:, 2].sum()
 
 
 def _edge_strike(radar, chord, line_h, dt=2e-9, t_end=2.4e-5):

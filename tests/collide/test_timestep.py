@@ -66,18 +66,15 @@ def test_paper_rope_modulus_is_far_too_soft_for_the_contact():
     assert hertz_max_penetration(1.6e-3, 500.0, k, 1.5) < 0.5 * (2.25e-3 + 3e-3)
 
 
-def test_line_density_takes_the_length_reached_within_the_horizon():
+def test_line_density_is_the_mass_per_rest_length():
     # Reference: closed form. A chain of three free nodes (masses 1, 2, 1 g) on two segments of
-    # 10 mm and 20 mm: the tributary lengths are 5, 15, 10 mm, so m/L = 0.2, 0.1333, 0.1 kg/m and the
-    # smallest is the last node's. With the second segment's ends separating at 100 m/s, over a 10 µs
-    # horizon it reaches 21 mm: 1e-3 / 10.5e-3 = 0.0952 kg/m; a held node is not counted.
+    # rest length 10 mm and 20 mm: the tributary rest lengths are 5, 15, 10 mm, so m/L0 = 0.2, 0.1333,
+    # 0.1 kg/m and the smallest is the last node's; a held node is not counted. (The line law's
+    # stiffness is per metre of rest length, kernel._line_contact: stretching does not enter.)
     seg = np.array([[0, 1], [1, 2]])
-    x = np.array([[0.0, 0.0, 0.0], [0.01, 0.0, 0.0], [0.03, 0.0, 0.0]])
+    rest = np.array([0.01, 0.02])
     mass = np.array([1e-3, 2e-3, 1e-3])
     free = np.ones(3, bool)
-    assert line_density_min(seg, x, mass, free) == pytest.approx(0.1, rel=1e-12)
-    v = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 100.0, 0.0]])
-    assert line_density_min(seg, x, mass, free, v, 1e-5) == pytest.approx(1e-3 / 10.5e-3, rel=1e-12)
-    assert line_density_min(seg, x, mass, free, v, 0.0) == pytest.approx(0.1, rel=1e-12)
+    assert line_density_min(seg, rest, mass, free) == pytest.approx(0.1, rel=1e-12)
     free[2] = False
-    assert line_density_min(seg, x, mass, free, v, 1e-5) == pytest.approx(2e-3 / 15.5e-3, rel=1e-12)
+    assert line_density_min(seg, rest, mass, free) == pytest.approx(2e-3 / 15e-3, rel=1e-12)
