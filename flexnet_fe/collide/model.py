@@ -71,8 +71,8 @@ class CollideModel(NamedTuple):
         pieces cut during the run (``collide.adapt``), stiffer than the rest, so the far window
         stays set by the uncut rope (empty: none).
     Line contact (``collide.contact_law = "line"``, ``contact.stiffness.line_stiffness``):
-        line_law: the linear line-load law q = k_l δ [N/m] integrated along each segment by the
-        midpoint rule on points h apart anchored at its deepest point (``kernel._line_contact``);
+        line_law: the linear line-load law q = k_l δ [N per metre of rest length] integrated along
+        each segment by the midpoint rule on points h apart (``kernel._line_contact``);
         kl_body, kl_fin (nf,) [N/m²] k_l per part; line_h_body, line_h_fin (nf,) [m] the spacing h
         per part. False: Eq. (28) once per segment at its closest point (``contact_law = "segment"``).
     """
