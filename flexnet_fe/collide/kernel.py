@@ -658,7 +658,7 @@ def _line_contact(model, state, wk, slot, fin, seg_pt, dt, apply):
     by ½ k_l δ² per metre the pressed rope stretched, an axial force that at δ = 1 mm (2.7 kN)
     dwarfs the paper rope's E A = 16 N and crushed pressed pieces to micrometres, where its
     direction flips; a rope bundle striking a rudder then created 12 % of the energy exchanged at
-    the case's step (benchmarks/strike_convergence.py; 0.02 % now). Per rest length, each
+    the case's step (benchmarks/strike_convergence.py; ≤ 0.11 % now). Per rest length, each
     material element of rope meets the part as an unstretched one would (its ω² = k_l / ρA), so
     the contact limit of the step does not move as the rope stretches.
     Returns the stored energy U [J]; with ``apply``, the slot's approach speed is reset when no

@@ -97,11 +97,12 @@ def bound_measures(res, fins: dict, k_fin: float, exponent: float, speed: float,
             "work_j": work, "work_rel": work / exchanged, "v_rms_mps": v_rms, "v_rel": v_rms / speed}
 
 
-def _soft_rows(ctx: Context, case, s: dict, c_def: float, m: dict) -> list[dict]:
-    """Headline rows of each softened contact (``SOFT_FACTORS``) and its u / extra-give row."""
+def _soft_rows(ctx: Context, case, s: dict, c_def: float, m: dict) -> tuple[list[dict], set]:
+    """(headline rows of each softened contact (``SOFT_FACTORS``) and its u / extra-give row, the
+    factors whose softened run stopped — a rope through a fin: that contact gives no bound)."""
     from flexnet_fe.errors import NumericalError
 
-    e_t, out = case.net.transverse_modulus, []
+    e_t, out, stopped = case.net.transverse_modulus, [], set()
     for f in SOFT_FACTORS:
         without = f"contact stiffness K / {f:g} (net.transverse_modulus {e_t / f:g} Pa)"
         try:
@@ -109,7 +110,7 @@ def _soft_rows(ctx: Context, case, s: dict, c_def: float, m: dict) -> list[dict]
         except NumericalError as err:  # the softened rope passes through a fin: no bound from it
             out.append(_row(without, "run", None, f"stopped: {str(err).split(';')[0]}", math.nan, (c_def, math.nan),
                             None))
-            m[f]["stopped"] = True
+            stopped.add(f)
             continue
         t = soft.summary
         for h in HEADLINES:
@@ -121,7 +122,7 @@ def _soft_rows(ctx: Context, case, s: dict, c_def: float, m: dict) -> list[dict]
         out.append(_row(f"elastic fins: largest fin displacement u against the K/{f:g} contact's extra give at "
                         "the largest fin contact force", f"u / extra give (≤ 1: the K/{f:g} rows bound the fins)",
                         mf["extra_give_m"], mf["u_max_m"], mf["u_over_extra"], (c_def, c_soft), None))
-    return out
+    return out, stopped
 
 
 def rows(ctx: Context, notes: list[str]) -> list[dict]:
@@ -134,14 +135,14 @@ def rows(ctx: Context, notes: list[str]) -> list[dict]:
     s = res.summary
     m = {f: bound_measures(res, fins, s["contact_stiffness_fin"], case.collide.contact_exponent,
                            case.collide.impact_speed, f) for f in SOFT_FACTORS}
-    out = _soft_rows(ctx, case, s, c_def, m)
+    out, stopped = _soft_rows(ctx, case, s, c_def, m)
     m0 = m[SOFT_FACTORS[0]]
     out.append(_row("elastic fins: work of the contact loads on the moving fins (shell, one-way)",
                     "Σ fin external work / energy exchanged", 0.0, m0["work_j"], m0["work_rel"], (c_def, c_shell),
                     bool(m0["work_rel"] > HEADLINE_TOLERANCE)))
     out.append(_row("elastic fins: largest RMS fin speed (shell kinetic energy)", "fin RMS speed / impact speed",
                     0.0, m0["v_rms_mps"], m0["v_rel"], (c_def, c_shell), bool(m0["v_rel"] > HEADLINE_TOLERANCE)))
-    cover = [f"K/{f:g}: the softened run stopped (tunnelling), no bound" if m[f].get("stopped") else
+    cover = [f"K/{f:g}: the softened run stopped (tunnelling), no bound" if f in stopped else
              f"K/{f:g}: {m[f]['u_over_extra']:.3g} ({'bounds' if m[f]['u_over_extra'] <= 1 else 'does NOT bound'})"
              for f in SOFT_FACTORS]
     notes.append(

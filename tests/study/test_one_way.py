@@ -1,4 +1,5 @@
-"""The one-way fin bound's measures (``study.one_way.bound_measures``) on a hand-made record."""
+"""The one-way fin bound's measures (``study.one_way.bound_measures``) on a hand-made record, and its
+softened runs when they stop."""
 
 from __future__ import annotations
 
@@ -8,7 +9,9 @@ import types
 import numpy as np
 import pytest
 
-from flexnet_fe.study.one_way import bound_measures
+from flexnet_fe.errors import NumericalError
+from flexnet_fe.study import one_way
+from flexnet_fe.study.one_way import SOFT_FACTORS, bound_measures
 
 
 def test_bound_measures_follow_the_hertz_law_and_the_fin_energies():
@@ -29,3 +32,20 @@ def test_bound_measures_follow_the_hertz_law_and_the_fin_energies():
     assert m["work_j"] == 2.5 and m["work_rel"] == pytest.approx(2.5e-3, rel=1e-14)
     assert m["v_rms_mps"] == pytest.approx(math.sqrt(2.0), rel=1e-14)
     assert m["v_rel"] == pytest.approx(math.sqrt(2.0) / 500.0, rel=1e-14)
+
+
+def test_a_softened_run_that_tunnels_is_recorded_as_no_bound(monkeypatch):
+    # Reference: the study's contract (issue 15 §2: a method's failure is shown, not hidden). A
+    # softened contact whose rope passes through a fin stops with NumericalError; the study must
+    # keep going, write one "stopped" row per factor naming the reason (no headline difference, no
+    # verdict) and report every factor as stopped, so no bound is claimed from it.
+    def tunnels(ctx, extra):
+        raise NumericalError("collide: tunnelling at t ≈ 0.0044 s: a rope centre line reached the core of wing_4; K …")
+
+    monkeypatch.setattr(one_way, "_collide", tunnels)
+    case = types.SimpleNamespace(net=types.SimpleNamespace(transverse_modulus=1e10))
+    rows, stopped = one_way._soft_rows(None, case, {}, 30.0, {f: {} for f in SOFT_FACTORS})
+    assert stopped == set(SOFT_FACTORS) and len(rows) == len(SOFT_FACTORS)
+    for r in rows:
+        assert r["headline"] == "run" and r["without_value"].startswith("stopped: collide: tunnelling")
+        assert math.isnan(r["difference_rel"]) and r["matters"] is None
