@@ -27,13 +27,15 @@ from flexnet_fe.collide.model import A_DISS_AIR, A_IMP_AIR
 from flexnet_fe.net.forces import CD_FRICTION, C_CROSS, segment_aero_force
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=False)
 def segment_air(model, state, f, e, u, length, dt, scale):
     """Adds ``scale`` × the air force on live segment e, Eq. (5)–(8), half to each end node's row of
     f [N] (n, 3); books its work and impulse over dt [s], the time the force acts (scale × the
     step the caller multiplies f by: the far net's air impulse of several windows,
     ``kernel._far_window``). u unit vector i → j (3 floats), length [m] the segment's current
-    length. A no-op (no arithmetic on f) when ``model.air_density`` is 0 (air off)."""
+    length. A no-op (no arithmetic on f) when ``model.air_density`` is 0 (air off). Compiled
+    without reference counting, as the kernel's loops that call it per segment (``collide.kernel``,
+    "Call cost")."""
     if model.air_density == 0.0:
         return
     if e >= model.diameter.shape[0]:  # a hand-built model with air but no diameters (no bounds check in numba)

@@ -80,17 +80,26 @@ moves farther than d from its position at the window's start (every step for the
 window's end for the slow ones, whose motion in the window is a straight line) stops the call with
 FAR. ratio = 1 is the single-rate loop (every segment and node every step, no check).
 
-Call cost: a compiled call that passes the model, state and work records (≈ 50 arrays) costs
-≈ 0.5 µs when LLVM does not inline it — more than the narrow phase of a capsule — and even
-inlined by numba (``inline="always"``) binding the records to the callee's names costs ≈ 0.23 µs
-per call (measured: the fin narrow phase of 58 candidates, 19.4 µs with the records, 6.4 µs with
-plain arrays; presumably the reference counts of the records' arrays). So the narrow phase is
-one call per list (``segment_contacts`` walks the candidates), the per-contact helpers
-(``_apply_to_node``, ``_book_dissipative``, ``_book_penetration``) take plain arrays, and the
-per-segment tests of the rebuild (``_clearance``, ``_part_mask``, ``_fin_gap``) too
-(docs/performance.md, "Collide kernel at fine rope resolution" and "Collide: the narrow phase
-without the records"). ``_apply`` and ``_tunnel`` still take the records (one binding per
-contact; ~30 arrays would otherwise be positional).
+Call cost, and no reference counting in the hot loop. A compiled call that passes the model, state
+and work records (≈ 50 arrays) costs ≈ 0.5 µs when LLVM does not inline it — more than the narrow
+phase of a capsule — and even inlined by numba (``inline="always"``) binding the records to the
+callee's names costs ≈ 0.23 µs per call (measured: the fin narrow phase of 58 candidates, 19.4 µs
+with the records, 6.4 µs with plain arrays). The cost is numba's reference counting (NRT): every
+binding of an array, a view or a record of arrays increments and later decrements each array's
+count, an atomic read-modify-write. Sampled with ``perf`` on radar × traction's impact
+(2026-11-28, the run's JIT symbols mapped by hand), ``NRT_incref`` and ``NRT_decref`` took about a
+fifth of the kernel's time, beside 6 % for ``segment_contacts`` itself. The functions of the step's
+hot paths — the broad phase (``_to_body``, ``_build_candidates`` and its tests), the narrow phase
+(``segment_contacts``, ``_line_contact``, the part shapes' closest points in ``missile.shapes``),
+the rope and air forces and the far net's windows — are therefore compiled with ``_nrt=False``:
+no reference counts at all. That is safe because none of them allocates: numba refuses to compile
+an allocation (or a call that returns a new array) in such a function, and every array they see is
+owned by the caller for the whole call. Same arithmetic, same results to the last bit; the
+measured gain is in docs/performance.md, "No reference counting in the collide kernel". The
+functions that still allocate (the missile's rigid step, the attitude matrix, the calls' scratch)
+run once per step or per call. The per-contact helpers (``_apply_to_node``,
+``_book_dissipative``, ``_book_penetration``) take plain arrays; ``_apply`` and ``_tunnel`` take the
+records (inlined).
 
 A fin's core is its contact polygon (root extended into the body, tip corners rounded to the fin
 set's ``tip_corner_radius``: ``missile.shapes`` fin_core, ``missile.planform``; the broad phase's
@@ -277,7 +286,7 @@ def _measure_work(model, pbn):
                     np.zeros(0, np.bool_), i1, np.zeros(2, np.int64), np.zeros(1, np.int64))
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _to_body(model, state, wk, nodes, count):
     """Positions in B [m] of the nodes ``nodes[:count]`` into wk.pbn (n, 3); wk.r must hold the
     attitude. Returns (rebuild, far): rebuild True when one of them has moved (in B) by its margin
@@ -300,7 +309,7 @@ def _to_body(model, state, wk, nodes, count):
     return moved, far
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _near_missile(model, pa, pb):
     """Broad phase: can the capsule a–b [m] (B) reach the missile's bounding cylinder?"""
     rad = model.rope_radius
@@ -324,7 +333,7 @@ ROUND_OFF_GUARD = 1.0e-9
 the missile's size), the proof below is in exact arithmetic."""
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _clearance(bb, rad, fin_pl, fin_rh, cones, pa, pb, skin):
     """A lower bound [m] of how far the capsule a–b (B) of radius rad [m] is from touching any
     part (bb: ``CollideModel.bbox``; fin_pl, fin_rh: ``StepWork``): > 0 proves it touches
@@ -358,7 +367,7 @@ ALL_PARTS = -1
 """``segment_contacts`` mask: every part (bits of ``_part_mask``)."""
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _part_mask(bb, rad, fin_pl, fin_rh, cones, pa, pb, skin):
     """(mask, lb) of a candidate capsule a–b (B): bit 0 set when the body's lower bound
     (bounding-cylinder gaps, ``_body_gap``) is ≤ ``skin`` [m], bit 1 + fi when fin fi's
@@ -385,7 +394,7 @@ def _part_mask(bb, rad, fin_pl, fin_rh, cones, pa, pb, skin):
     return mask, lb
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _build_candidates(model, state, wk):
     """Rebuild the candidate list from the node positions in B (wk.pbn): the live fast segments
     (wk.fseg; all of them at single rate) whose ``_clearance`` is ≤ CANDIDATE_SKIN, each with
@@ -444,7 +453,7 @@ def _body_gap(axis, cones, rad, pa, pb, r_body):
     return g - rad
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _axis_distance(pa, pb):
     """Smallest distance [m] of the segment a–b (B) from the missile axis x_b (closed form)."""
     dy, dz = pb[1] - pa[1], pb[2] - pa[2]
@@ -453,7 +462,7 @@ def _axis_distance(pa, pb):
     return np.sqrt((pa[1] + s * dy) ** 2 + (pa[2] + s * dz) ** 2)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _fin_gap(fin_pl, fi, rh, pa, pb):
     """A lower bound [m] of (distance from the segment a–b (B) to fin fi's core) − rh (rh = r +
     h/2 [m]): the largest of the segment's distances to the core's mid-plane and to each edge's
@@ -636,7 +645,7 @@ def _line_grid(model, state, wk, slot, fin, geo, dt, apply):
     return energy, touched
 
 
-@njit(cache=True)  # not inlined: one compiled copy (the segment law's path stays inline)
+@njit(cache=True, _nrt=False)  # not inlined: one compiled copy (the segment law's path stays inline)
 def _line_contact(model, state, wk, slot, fin, seg_pt, dt, apply):
     """Line contact of a segment with one part, ``collide.contact_law = "line"``
     (``contact.stiffness.line_stiffness``); seg_pt = (pa, pb, s*): its ends [m] (3,) in B and the
@@ -736,7 +745,7 @@ def _tunnel(model, state, slot, part, s, step):
     return OK if model.allow_tunnel else TUNNEL
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def segment_contacts(model, state, wk, segs, masks, dt, apply, step):
     """All contacts of the capsules ``segs`` (ends wk.pbn in B) with the missile's parts, in
     that order; dead segments have none (their slots reset when applying).
@@ -822,7 +831,7 @@ def _book_penetration(acc, delta, ratio):
         acc[A_PEN_RATIO] = ratio
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _rope_forces(model, state, wk, dt, segs, count, air):
     """Rope tensions of the segments ``segs[:count]`` into wk.f (Eq. (1)–(4)) and, with ``air``
     and ``collide.air``, the rope's air force (Eq. (5)–(8), ``collide.air``), their dissipation
@@ -839,8 +848,8 @@ def _rope_forces(model, state, wk, dt, segs, count, air):
             (x[j, 0] - x[i, 0], x[j, 1] - x[i, 1], x[j, 2] - x[i, 2]), (v[j, 0] - v[i, 0], v[j, 1] - v[i, 1],
             v[j, 2] - v[i, 2]), 0.0, (model.rest[e], model.k[e], model.c[e], model.off[e]))
         if stretch > model.break_stretch[e]:
-            u_c, _, _ = segment_contacts(model, state, wk, segs[c:c + 1], np.zeros(0, np.int64), dt, False,
-                                         0)
+            u_c, _, _ = segment_contacts(model, state, wk, segs[c:c + 1], segs[:0], dt, False, 0)  # (no masks:
+            # every part; an empty view, as this function may not allocate)
             state.alive[e] = False
             state.acc[A_NBROKEN] += 1.0
             state.acc[A_BROKEN] += rope_elastic_energy(stretch, model.k[e]) + u_c
@@ -860,7 +869,7 @@ def _rope_forces(model, state, wk, dt, segs, count, air):
     state.acc[A_DISS_ROPE] = diss
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _air_impulse(model, state, f, scale, dt):
     """``scale`` × the air force (Eq. (5)–(8), ``collide.air``) on every live segment into f [N]
     (n, 3), booked as acting over dt [s] (``_far_window``: the impulse of the next air_every
@@ -876,7 +885,7 @@ def _air_impulse(model, state, f, scale, dt):
             segment_air(model, state, f, e, (d0 / lf, d1 / lf, d2 / lf), lf, dt, scale)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _step_contacts(model, state, wk, dt, step):
     """Contacts of the candidate segments (the others cannot touch: ``_build_candidates``), in
     increasing segment order as over all segments. Returns (status, contacts)."""
@@ -966,7 +975,7 @@ window (slow nodes move at constant velocity; the missile's rate and speed chang
 themselves in a window of the paper cases). A node that still moves farther stops the run (FAR)."""
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _far_check(model, state, wk, alln):
     """Every node's position in B into wk.pbn (wk.r must hold the attitude); True when one has
     moved farther since the window's start than its bound wk.dfar."""
@@ -981,7 +990,7 @@ asks the next split to evaluate every segment afresh (``StepWork.refresh``): abo
 once, and the kept bounds are tight again."""
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _far_split(model, state, wk, d):
     """Split the live segments (positions in B: wk.pbn) into fast (clearance ≤ d [m]: may touch a
     part within the window; or ``model.always_fast``) and slow, in increasing order, with the fast nodes; the segments that
@@ -1059,7 +1068,7 @@ def _far_split(model, state, wk, d):
         wk.refresh[0] = 1
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _far_window(model, state, wk, alln, w, dt):
     """Start a window of w steps of dt [s] (module docstring, "Far net"): check the last window's
     bounds, split the segments (``_far_split``) with the bound d = FAR_BOUND_FACTOR × w dt × the

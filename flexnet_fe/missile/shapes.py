@@ -17,6 +17,11 @@ Shapes (the same parameters as the Gmsh meshes of :mod:`flexnet_fe.missile.mesh`
     (s = -x_b, r = sqrt(y_b² + z_b²)) by a profile of segments and circular arcs; the 3-D
     distance to a surface of revolution equals the 2-D distance to its profile in the point's meridian plane.
 
+The scalar queries the collide kernel calls per contact point (``body_closest_scalar``,
+``segment_body_closest``, ``segment_core_closest``, ``point_core_closest`` and their helpers) are
+compiled with ``_nrt=False``: no reference counting of their array arguments, which cost more than
+the queries themselves (``collide.kernel``, "Call cost"); they allocate nothing.
+
 Packed arrays (``pack_shapes(missile) -> ShapeArrays``, a NamedTuple; pass ``*shapes`` to the
 ``@njit`` functions, in this order):
     prof_kind  int64 (m,)      0 segment, 1 circular arc
@@ -195,7 +200,7 @@ def nose_cones(prof_kind: np.ndarray, prof_data: np.ndarray, n: int = NOSE_CONES
     return np.array(rows, dtype=np.float64).reshape(-1, 2)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _closest_on_segment_2d(ps, pr, s0, r0, s1, r1):
     """Closest point (s, r) on the segment (s0, r0)–(s1, r1) to (ps, pr)."""
     ds, dr = s1 - s0, r1 - r0
@@ -205,7 +210,7 @@ def _closest_on_segment_2d(ps, pr, s0, r0, s1, r1):
     return s0 + t * ds, r0 + t * dr
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _closest_on_arc_2d(ps, pr, sc, rc, rho, th0, th1):
     """Closest point (s, r) on the arc of centre (sc, rc), radius rho, angles [th0, th1]."""
     th = np.arctan2(pr - rc, ps - sc)
@@ -220,7 +225,7 @@ def _closest_on_arc_2d(ps, pr, sc, rc, rho, th0, th1):
     return s_b, r_b
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _profile_radius(s, prof_kind, prof_data):
     """Body radius r(s) [m] at station s, or -1 where s is outside [0, L]."""
     for i in range(prof_kind.shape[0]):
@@ -236,7 +241,7 @@ def _profile_radius(s, prof_kind, prof_data):
     return -1.0
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _profile_normal_2d(i, qs, qr, prof_kind, prof_data):
     """Outward unit normal (n_s, n_r) of profile piece i at its point (qs, qr)."""
     d = prof_data[i]
@@ -247,7 +252,7 @@ def _profile_normal_2d(i, qs, qr, prof_kind, prof_data):
     return (qs - d[0]) / d[2], (qr - d[1]) / d[2]
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def body_closest_scalar(p, prof_kind, prof_data, prof_part):
     """Allocation-free :func:`body_closest_point`: (d, n_x, n_y, n_z, q_x, q_y, q_z, part)."""
     s = -p[0]
@@ -420,12 +425,12 @@ def closest_points(points: np.ndarray, shapes: ShapeArrays):
 # wherever the pair is unique (the closest-point map of a convex set is continuous).
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _clamp01(t):
     return 0.0 if t < 0.0 else (1.0 if t > 1.0 else t)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _segment_edge_2d(ra, rb, cu, cv, du, dv):
     """Closest points of the 3-D segment a–b (ra, rb [m] (3,), fin coordinates u, v, w) and the
     in-plane edge (cu, cv)–(du, dv) (w = 0). Returns (squared distance [m²], s on a–b, t on c–d) (Ericson, Real-Time Collision Detection
@@ -457,7 +462,7 @@ def _segment_edge_2d(ra, rb, cu, cv, du, dv):
     return (pu - qu) ** 2 + (pv - qv) ** 2 + pw * pw, s, t
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _inside_polygon(u, v, poly):
     """Is (u, v) inside (or on) the counter-clockwise convex polygon ``poly`` (k, 2)?"""
     k = poly.shape[0]
@@ -469,7 +474,7 @@ def _inside_polygon(u, v, poly):
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _to_fin(p, origin, axes):
     """Fin coordinates (u, v, w) [m] of the point p [m] (3,) in B: ((p − origin)·e1, ·e2, ·n)."""
     return ((p[0] - origin[0]) * axes[0, 0] + (p[1] - origin[1]) * axes[0, 1] + (p[2] - origin[2]) * axes[0, 2],
@@ -477,7 +482,7 @@ def _to_fin(p, origin, axes):
             (p[0] - origin[0]) * axes[2, 0] + (p[1] - origin[1]) * axes[2, 1] + (p[2] - origin[2]) * axes[2, 2])
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def segment_core_closest(a, b, origin, axes, poly):
     """Closest pair of the segment a–b [m] (3,) in B and a fin's core polygon (its planform in
     the mid-plane). origin (3,), axes (3, 3) rows e1, e2, n, poly (k, 2) counter-clockwise in
@@ -512,7 +517,7 @@ def segment_core_closest(a, b, origin, axes, poly):
     return np.sqrt(best), bs, bu, bv, best == 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def point_core_closest(p, origin, axes, poly):
     """Closest point of a fin's core polygon to the point p [m] (3,) in B (``segment_core_closest``
     for a point). Returns (dist [m] ≥ 0, q_u, q_v [m] fin coordinates of the closest core point):
@@ -530,7 +535,7 @@ def point_core_closest(p, origin, axes, poly):
     return np.sqrt(best + w * w), bu, bv
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def segment_body_closest(a, b, prof_kind, prof_data, prof_part, cutoff=np.inf):
     """Point of the segment a–b [m] (3,) in B deepest in (or nearest to) the body of revolution.
 
