@@ -88,7 +88,7 @@ with the records, 6.4 µs with plain arrays). The cost is numba's reference coun
 binding of an array, a view or a record of arrays increments and later decrements each array's
 count, an atomic read-modify-write. Sampled with ``perf`` on radar × traction's impact
 (2026-11-28, the run's JIT symbols mapped by hand), ``NRT_incref`` and ``NRT_decref`` took about a
-fifth of the kernel's time, beside 6 % for ``segment_contacts`` itself. The functions of the step's
+fifth of the kernel's time, beside 10 % for ``segment_contacts`` itself. The functions of the step's
 hot paths — the broad phase (``_to_body``, ``_build_candidates`` and its tests), the narrow phase
 (``segment_contacts``, ``_line_contact``, the part shapes' closest points in ``missile.shapes``),
 the rope and air forces and the far net's windows — are therefore compiled with ``_nrt=False``:
