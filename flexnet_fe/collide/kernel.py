@@ -25,8 +25,11 @@ Per step (symplectic Euler for the net nodes and the rigid missile, ``rigid_body
 3. Hunt–Crossley damping, Eq. (29): F_n = K δ^m (1 + χ δ̇), χ = damp_c / v_k, with v_k the
    LARGEST approach speed seen in the current contact (≥ v_floor). So χ δ̇ ≤ damp_c while
    approaching: the damping force never exceeds damp_c × the elastic force, whatever part the
-   contact slides to. Friction Eq. (32), regularised, its impulse per step capped at the
-   discrete stick (``contact.law.friction_force``, STICK_FRACTION). Both are booked as dissipated
+   contact slides to; its dashpot K δ^m χ is capped at the explicit step's bound STICK_FRACTION ×
+   m_eff / dt (``contact.law.normal_force``, ``damp_cap``: without it a contact that began at the
+   v_floor and is pressed hard alternates from step to step). Friction Eq. (32), regularised, its
+   impulse per step capped at the discrete stick (``contact.law.friction_force``, the same
+   bound). Both are booked as dissipated
    at the step's mean velocity (``_book_mean_velocity``): the exact work of the applied forces
    under symplectic Euler, so the energy balance measures the integration error of the
    conservative forces alone;
@@ -547,15 +550,16 @@ def _apply(model, state, wk, slot, fin, pt, dt, law):
     ddot = -vn
     vk = approach_speed(state.vk[slot], ddot, model.v_floor)
     state.vk[slot] = vk
-    fel = kk * delta ** expo
-    fn = normal_force(delta, ddot, kk, expo, model.damp_c / vk)
-    vt0, vt1, vt2 = vr0 - vn * nw0, vr1 - vn * nw1, vr2 - vn * nw2
     inv_m = 1.0 / model.m_mass  # the contact point's effective mass (translation; the missile's
     if model.free[i]:           # rotation adds < 1e-6 of a rope piece's 1/m)
         inv_m += w * w / model.mass[i]
     if model.free[j]:
         inv_m += s * s / model.mass[j]
-    ft0, ft1, ft2 = friction_force(fn, model.mu, vt0, vt1, vt2, model.v_reg, wstick * STICK_FRACTION / (inv_m * dt))
+    cap = wstick * STICK_FRACTION / (inv_m * dt)  # [kg/s] the explicit step's discrete bound
+    fel = kk * delta ** expo
+    fn = normal_force(delta, ddot, kk, expo, model.damp_c / vk, cap)
+    vt0, vt1, vt2 = vr0 - vn * nw0, vr1 - vn * nw1, vr2 - vn * nw2
+    ft0, ft1, ft2 = friction_force(fn, model.mu, vt0, vt1, vt2, model.v_reg, cap)
     f0, f1, f2 = fn * nw0 + ft0, fn * nw1 + ft1, fn * nw2 + ft2
     _apply_to_node(model.free, state.acc, f, i, w, (f0, f1, f2), dt)
     _apply_to_node(model.free, state.acc, f, j, s, (f0, f1, f2), dt)
@@ -925,8 +929,9 @@ def _integrate(model, state, wk, dt):
 
 STICK_FRACTION = 0.5
 """[-] The friction impulse of one step removes at most this fraction of a contact point's slip
-(``contact.law.friction_force``, ``stick``): below 1 so that the two contacts of a node shared by
-two pieces on one fin edge do not together reverse it."""
+(``contact.law.friction_force``, ``stick``), the damping impulse at most this fraction of its
+normal approach speed (``contact.law.normal_force``, ``damp_cap``): below 1 so that the two
+contacts of a node shared by two pieces on one fin edge do not together reverse it."""
 
 
 @njit(cache=True)

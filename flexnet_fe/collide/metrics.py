@@ -319,6 +319,46 @@ def fin_impulses(fins: FinContacts) -> dict[str, np.ndarray]:
     return {str(name): tot[i] for i, name in enumerate(fins.fin_names)}
 
 
+ALTERNATION_SHARE = 0.1
+"""[-] A sample alternates when its load's second difference (F_{k−1} − 2 F_k + F_{k+1}) / 4 exceeds
+this share of the local mean (F_{k−1} + 2 F_k + F_{k+1}) / 4 and points against the previous
+sample's (:func:`load_alternation_runs`)."""
+
+ALTERNATION_RUN_LIMIT = 8
+"""[samples] A fin load that alternates for more consecutive samples than this is flagged: a
+physical strike rises over 1–4 µs (3–13 samples of 0.3125 µs) and alternates for at most a
+sample or two (the three paper cases' 24 fins: ≤ 2 with the contact damping's cap); an explicit
+step past its stability limit alternates for as long as it stays past it (before the cap:
+infrared × traction's rudders 1–4 for 170–2 091 samples, radar × traction's rudders 2 and 4 for
+15 and 23; docs/validation.md, "Contact damping at the explicit limit")."""
+
+
+def load_alternation_runs(row_start, fin, force, n_fins: int) -> np.ndarray:
+    """Longest run of consecutive samples in which each fin's resultant load alternates from one
+    sample to the next (the signature of an explicit step past its stability limit), shape
+    (n_fins,) int.
+
+    row_start (nt + 1,) int offsets of each sample's rows, fin (ne,) int fin index of each row,
+    force (ne, 3) [N] its mean force over the sample (``fin_contacts.npz``)."""
+    row_start = np.asarray(row_start, dtype=np.int64)
+    nt = row_start.size - 1
+    out = np.zeros(n_fins, dtype=np.int64)
+    if nt < 4:
+        return out
+    sample = np.repeat(np.arange(nt), np.diff(row_start))
+    load = np.zeros((n_fins, nt, 3))
+    np.add.at(load, (np.asarray(fin, dtype=np.int64), sample), np.asarray(force, dtype=float).reshape(-1, 3))
+    second = load[:, :-2] - 2.0 * load[:, 1:-1] + load[:, 2:]
+    mean = load[:, :-2] + 2.0 * load[:, 1:-1] + load[:, 2:]
+    flip = np.einsum("fkc,fkc->fk", second[:, 1:], second[:, :-1]) < 0.0
+    big = np.linalg.norm(second[:, 1:], axis=2) > ALTERNATION_SHARE * np.linalg.norm(mean[:, 1:], axis=2)
+    for f, on in enumerate(flip & big):
+        edges = np.flatnonzero(np.diff(np.concatenate([[0], on.astype(np.int8), [0]])))
+        if edges.size:
+            out[f] = int((edges[1::2] - edges[::2]).max())
+    return out
+
+
 def filtered_peak(t_mid, accel, cfc: float) -> dict:
     """CFC-filtered peak of an acceleration interval series.
 

@@ -42,7 +42,8 @@ from flexnet_fe.collide.crop import (active_segments, boundary_motion, boundary_
                                      wave_speed)
 from flexnet_fe.collide.adapt import Lineage, cut_counts, cut_live, lineage_cut, lineage_start, merge_roots
 from flexnet_fe.collide.refine import refine_near_fins, split_near_path
-from flexnet_fe.collide.metrics import FinContacts, MissileHistory, collision_metrics
+from flexnet_fe.collide.metrics import (ALTERNATION_RUN_LIMIT, FinContacts, MissileHistory, collision_metrics,
+                                       load_alternation_runs)
 from flexnet_fe.collide.scene import HeldNet, MissileStart, fin_planes, place_missile
 from flexnet_fe.collide.timestep import (StepChoice, choose_step, contact_stiffness,
                                         line_density_min, line_stiffnesses, spring_limit)
@@ -903,6 +904,19 @@ class _Recorder:
         return _summary(self, setup, loads, x_start, dt, steps, wall)
 
 
+def _alternation(loads: FinLoads, load_dt: float, warnings: list[str]) -> dict[str, int]:
+    """Each fin's longest run of step-to-step load alternation [samples]
+    (``metrics.load_alternation_runs``); a warning appended for each run beyond
+    ALTERNATION_RUN_LIMIT (``load_dt`` [s]: the fin loads' sample interval)."""
+    runs = load_alternation_runs(loads.row_start, loads.fin, loads.force, len(loads.fin_names))
+    for name, run in zip(loads.fin_names, runs):
+        if run > ALTERNATION_RUN_LIMIT:
+            warnings.append(f"collide: {name}'s load alternates from one sample to the next for {run} samples "
+                            f"({run * load_dt * 1e6:.3g} µs): an explicit step past its stability limit, not a "
+                            f"load — its shell stresses are not defined; halve dt (collide.pass_through_fraction)")
+    return {str(n): int(r) for n, r in zip(loads.fin_names, runs)}
+
+
 def _summary(rec: _Recorder, setup: Setup, loads: FinLoads, x_start, dt, steps, wall) -> dict:
     """The ``collide`` section of summary.json (DESIGN.md §3 keys plus extras)."""
     c, st, cfg, missile, km = rec.cols, rec.st, rec.cfg, rec.missile, rec.km
@@ -930,6 +944,7 @@ def _summary(rec: _Recorder, setup: Setup, loads: FinLoads, x_start, dt, steps, 
                        contact_force_n=c["contact_force_mean_n"], gravity_mps2=km.gravity, mass_kg=missile.mass),
         FinContacts(list(loads.fin_names), loads.fin, loads.force, cfg.load_dt), cfc=cfg.cfc_class)
     warnings += metrics.pop("warnings")
+    alternation = _alternation(loads, cfg.load_dt, warnings)
     e_ach, bad_e = restitution_check(DampingModel(cfg.damping_model).value, cfg.restitution, cfg.impact_speed,
                                      cfg.damping_min_approach_speed, cfg.contact_exponent)
     warnings += [bad_e] if bad_e else []
@@ -957,6 +972,7 @@ def _summary(rec: _Recorder, setup: Setup, loads: FinLoads, x_start, dt, steps, 
         "tunnelling_segment_steps": int(acc[M.A_CROSS]),
         "tunnelling_skipped_impulse_ns": float(acc[M.A_SKIPPED]),
         "broken_segments": int(acc[M.A_NBROKEN]),
+        "fin_load_alternation_samples": alternation,
         "steps": int(steps),
         "dt_s": dt,
         "dt_governed_by": setup.step.governed_by,

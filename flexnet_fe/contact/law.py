@@ -42,15 +42,31 @@ def hysteresis_factor(model_code, restitution, v_k):
 
 
 @njit(cache=True)
-def normal_force(delta, delta_dot, k_n, exponent, chi):
-    """Normal contact force magnitude [N], Eq. (28)–(29): F = K_n δ^m (1 + χ δ̇), never negative.
+def normal_force(delta, delta_dot, k_n, exponent, chi, damp_cap=np.inf):
+    """Normal contact force magnitude [N], Eq. (28)–(29): F = K_n δ^m + min(K_n δ^m χ, cap) δ̇,
+    never negative.
 
     delta [m] penetration (> 0 in contact), delta_dot [m/s] its rate, k_n [N/m^m] contact
     stiffness, exponent m (1.5 Hertz), chi [s/m] hysteresis factor. Zero when delta <= 0.
+
+    damp_cap [kg/s] (default: no cap) bounds the dashpot C = K_n δ^m χ, the damping force per
+    unit approach speed — the normal counterpart of :func:`friction_force`'s ``stick``. An
+    explicit step of dt with a contact point of effective mass m_eff passes
+    ``damp_cap = f m_eff / dt`` (f ≤ 1): the damping impulse of one step then removes at most
+    the fraction f of the normal approach speed, never reverses it. Without it a dashpot on a
+    lagged velocity is unstable once C dt / m_eff > 2: a contact that began slowly (χ = c / v_k
+    with v_k at its floor) and is then pressed hard has C = χ × (elastic force), and a light rope
+    piece's normal force alternates from step to step (measured: infrared × traction's rudders,
+    ±360 N on 940 N for 0.65 ms at dt = 0.3125 µs, gone at dt / 2; docs/validation.md, "Contact
+    damping at the explicit limit"). The cap acts only there: as dt → 0 it recovers Eq. (29).
     """
     if delta <= 0.0:
         return 0.0
-    f = k_n * delta ** exponent * (1.0 + chi * delta_dot)
+    fe = k_n * delta ** exponent
+    c = fe * chi
+    if c > damp_cap:
+        c = damp_cap
+    f = fe + c * delta_dot
     return f if f > 0.0 else 0.0
 
 

@@ -253,3 +253,25 @@ def test_bad_input_is_one_clear_line():
     fins = FinContacts(["a"], np.zeros(0, int), np.zeros((0, 3)), 1e-5)
     with pytest.raises(MetricsInputError, match="disagree"):
         collision_metrics(h._replace(gravity_mps2=np.zeros(3)), fins)
+
+
+def test_load_alternation_runs_flags_a_step_instability_not_a_strike():
+    # Reference: by construction. Fin 0: a strike, a half-sine of 4 µs (13 samples of 0.3125 µs)
+    # over a steady 900 N — it never alternates for more than a sample or two. Fin 1: 900 N with
+    # ±300 N flipping every sample for 100 samples (the explicit dashpot's period-2 mode seen on
+    # infrared × traction's rudders before the damping cap): one run of ~100 samples. Fin 2: no
+    # rows.
+    from flexnet_fe.collide.metrics import ALTERNATION_RUN_LIMIT, load_alternation_runs
+
+    nt = 300
+    k = np.arange(nt)
+    strike = 900.0 + 2000.0 * np.where((k >= 100) & (k < 113), np.sin(np.pi * (k - 100) / 13), 0.0)
+    chatter = 900.0 + np.where((k >= 50) & (k < 150), 300.0 * (-1.0) ** k, 0.0)
+    rows = np.stack([strike, chatter], axis=1)  # (nt, 2): one row per fin per sample
+    force = np.zeros((2 * nt, 3))
+    force[:, 0] = rows.ravel()
+    row_start = np.arange(0, 2 * nt + 1, 2)
+    fin = np.tile([0, 1], nt)
+    runs = load_alternation_runs(row_start, fin, force, 3)
+    assert runs[0] <= 2 and runs[2] == 0
+    assert 96 <= runs[1] <= 100 and runs[1] > ALTERNATION_RUN_LIMIT

@@ -200,3 +200,38 @@ def test_approach_speed_rule_bounds_the_damping():
     assert vk == 300.0 and c / vk * 300.0 == pytest.approx(0.5625, rel=1e-14)
     assert approach_speed(300.0, -50.0, 0.1) == 300.0  # restitution keeps the impact's v_k
     assert approach_speed(0.0, 0.01, 0.1) == 0.1  # floor
+
+
+def test_damping_cap_keeps_a_pressed_contact_from_alternating():
+    # Reference: static equilibrium of a point of mass m pressed on a rigid plane by a constant
+    # force P through the Hertz spring: K δ_s^1.5 = P. The infrared × traction rudders' case: a
+    # 0.7 mm rope piece (11 mg) that touched at the v_k floor (1 m/s; Lankarani–Nikravesh e = 0.5:
+    # χ = 0.5625 s/m) and is pressed with 200 N has the dashpot C = χ P = 112 kg/s, so
+    # C dt / m = 3.2 at dt = 0.3125 µs — past the lagged-velocity dashpot's explicit limit 2.
+    # Started 1 % from equilibrium, the uncapped step alternates and grows (the defect); with
+    # damp_cap = ½ m/dt (the kernel's STICK_FRACTION) the step is a dashpot at C dt/m = ½ and
+    # settles to δ_s. The spring alone is far inside its limit (ω dt = 0.03), so the test isolates
+    # the damping.
+    m, P, chi, dt = 1.1e-5, 200.0, 0.5625, 3.125e-7
+    k_n = P / 1.5e-3 ** 1.5  # δ_s = 1.5 mm
+    d_s = (P / k_n) ** (1 / 1.5)
+    assert chi * P * dt / m > 2.0
+
+    def run(cap, n=4000):
+        d, v, fs = 1.01 * d_s, 0.0, np.empty(n)
+        for i in range(n):
+            f = normal_force(d, v, k_n, 1.5, chi, cap)
+            v += dt * (P - f) / m
+            d += dt * v
+            fs[i] = f
+        return fs
+
+    free = run(np.inf)
+    alt_free = np.abs(free[-3:-1] - 0.5 * (free[-4:-2] + free[-2:])).max()
+    assert alt_free > 0.1 * P  # step-to-step alternation of the normal force
+    capped = run(0.5 * m / dt)
+    assert np.abs(capped[-200:] / P - 1.0).max() < 1e-6  # at rest at δ_s
+    # below the cap the law is Eq. (29) exactly
+    assert normal_force(1e-3, 2.0, 1e6, 1.5, 0.1, 1e9) == normal_force(1e-3, 2.0, 1e6, 1.5, 0.1)
+    # capped (C = 3.16 kg/s > 1): the dashpot is the cap's, and still only dissipates
+    assert normal_force(1e-3, -2.0, 1e6, 1.5, 0.1, 1.0) == pytest.approx(1e6 * 1e-3 ** 1.5 - 2.0, rel=1e-14)
