@@ -12,6 +12,7 @@ from flexnet_fe.collide import kernel as K
 from flexnet_fe.collide import model as M
 from flexnet_fe.collide.adapt import cut_counts, cut_live, lineage_cut, lineage_start, merge_roots
 from flexnet_fe.collide.config import CollideConfig
+from flexnet_fe.collide.metrics import ALTERNATION_RUN_LIMIT
 from flexnet_fe.collide.simulate import simulate
 
 from .test_collide import _fin_edge_scene
@@ -148,3 +149,6 @@ def test_line_law_holds_energy_through_the_rudder_strike(radar, log, scenes):
     s = simulate(_fin_edge_scene(soft), radar, cfg, 9.81, log).summary
     assert s["contact_law"] == "line" and s["fin_impulse_ns"]["rudder_1"] > 0.0
     assert s["energy_error_rel"] < 5e-3 and s["momentum_error_rel"] < 1e-8
+    # and its fin loads do not alternate from step to step (the guard of metrics.load_alternation_runs)
+    assert len(s["fin_load_alternation_samples"]) == 8  # every fin of the radar missile
+    assert max(s["fin_load_alternation_samples"].values()) <= ALTERNATION_RUN_LIMIT
