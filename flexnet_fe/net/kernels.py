@@ -9,10 +9,12 @@ lagged velocity the stability limit is ω dt <= 2 (√(1+ζ²) - ζ) (see ``time
 Layout: inside a call the positions, velocities and forces are held as (3, n) arrays (one
 contiguous row per component). A regular net's segments come in runs k0 … k0+L−1 joining nodes
 (a0 + r, a0 + r + s): a row of horizontal bars (s = 1) or a layer of vertical ones (s = the row
-length). Over a run the end values are contiguous slices, so the rope law is evaluated on whole
-vectors without gathers, and its forces are added to the nodes in two conflict-free passes (the j
-ends, then the i ends: the order in which the segment-by-segment loop added them, so the forces
-are the same to the bit). The other segments (hub links, short runs) take the per-segment loop.
+length) (:func:`spring_blocks`). Over a run the end values are contiguous, so the rope law is
+evaluated in SIMD registers without gathers (AVX-512 on this machine's EPYC), chunk by chunk into
+an L1-sized scratch, and the forces are added to the nodes in conflict-free loops that give every
+node its contributions in the order of the segment-by-segment loop: tensions, forces and
+trajectories are the same to the bit (only the summed dissipation and air work are added in
+another order). The other segments (hub links, short runs) take the per-segment loop.
 """
 
 from __future__ import annotations
@@ -27,7 +29,7 @@ from flexnet_fe.net.hub import hub_link_state
 
 C_MAX = CD_FRICTION + C_CROSS
 CHUNK = 256
-"""Segments of a run evaluated per pass: the pass's scratch (11 × 256 floats) stays in L1."""
+"""Segments of a run evaluated per pass: the pass's scratch (12 × 256 floats) stays in L1."""
 MIN_RUN = 16
 """Shortest run taken by the vector path; shorter ones join the per-segment loop."""
 
@@ -208,25 +210,44 @@ def _scatter(f, buf, rows, sign, ends):
         f[i0 + np.uint64(r)] += sign * buf[gj + np.uint64(r - s)]
 
 
-@njit(cache=True, error_model="numpy")
-def _run_law(xs, vs, law, ends, tension, out):
-    """The rope law (``forces.spring_force``) over a run chunk: segments k + r (0 <= r < c) join
-    nodes i0 + r and j0 + r, ends = (i0, j0, k) uint64 and c; xs, vs = 3 rows (n,) each of
-    positions [m] and velocities [m/s]; law = (rest, stiffness, damping, offset) (m,). Writes
-    tension (m,) [N] and into out (12 CHUNK,), rows of CHUNK: rows 0–2 the force T u on end i
-    [N], 3 the dissipation rate (T − K s) l̇ [W], 4 the straight length l [m], 5–7 the unit
-    vector u."""
+@njit(cache=True, inline="always")
+def _law(xs, vs, law, i, j, e):
+    """``forces.spring_force`` of segment e joining nodes i, j: xs, vs 3 rows (n,) each of
+    positions [m] and velocities [m/s]; law = (rest, stiffness, damping, offset) (m,)."""
     x0, x1, x2 = xs
     v0, v1, v2 = vs
     rest, stiffness, damping, offset = law
+    return spring_force((x0[j] - x0[i], x1[j] - x1[i], x2[j] - x2[i]), (v0[j] - v0[i], v1[j] - v1[i], v2[j] - v2[i]),
+                        0.0, (rest[e], stiffness[e], damping[e], offset[e]))
+
+
+@njit(cache=True, error_model="numpy")
+def _run_law(xs, vs, law, ends, tension, out):
+    """The rope law (:func:`_law`) over a run chunk: segments k + r (0 <= r < c) join nodes
+    i0 + r and j0 + r, ends = ((i0, j0, k) uint64, c). Writes tension (m,) [N] and into out
+    (12 CHUNK,), rows of CHUNK: rows 0–2 the force T u on end i [N], 3 the dissipation rate
+    (T − K s) l̇ [W]."""
     (i0, j0, k), c = ends
+    stiffness = law[1]
     for r in range(c):
-        i = i0 + np.uint64(r)
-        j = j0 + np.uint64(r)
         e = k + np.uint64(r)
-        t, u0, u1, u2, lf, ldot, stretch = spring_force(
-            (x0[j] - x0[i], x1[j] - x1[i], x2[j] - x2[i]), (v0[j] - v0[i], v1[j] - v1[i], v2[j] - v2[i]), 0.0,
-            (rest[e], stiffness[e], damping[e], offset[e]))
+        t, u0, u1, u2, lf, ldot, stretch = _law(xs, vs, law, i0 + np.uint64(r), j0 + np.uint64(r), e)
+        tension[e] = t
+        out[r] = t * u0
+        out[CHUNK + r] = t * u1
+        out[2 * CHUNK + r] = t * u2
+        out[3 * CHUNK + r] = (t - stiffness[e] * max(stretch, 0.0)) * ldot
+
+
+@njit(cache=True, error_model="numpy")
+def _run_law_geometry(xs, vs, law, ends, tension, out):
+    """:func:`_run_law`, also writing rows 4 the straight length l [m] and 5–7 the unit vector
+    u, for :func:`_run_air` (a separate function: the air-free path does not store them)."""
+    (i0, j0, k), c = ends
+    stiffness = law[1]
+    for r in range(c):
+        e = k + np.uint64(r)
+        t, u0, u1, u2, lf, ldot, stretch = _law(xs, vs, law, i0 + np.uint64(r), j0 + np.uint64(r), e)
         tension[e] = t
         out[r] = t * u0
         out[CHUNK + r] = t * u1
@@ -241,7 +262,7 @@ def _run_law(xs, vs, law, ends, tension, out):
 @njit(cache=True, error_model="numpy")
 def _run_air(vs, air, ends, out):
     """Rope aerodynamics (``_segment_air``, Eq. 5–10) over a run chunk (ends as
-    :func:`_run_law`'s), after :func:`_run_law` filled rows 0–2 (T u), 4 (l), 5–7 (u) of out:
+    :func:`_run_law`'s), after :func:`_run_law_geometry` filled rows 0–2 (T u), 4 (l), 5–7 (u) of out:
     vs 3 velocity rows (n,) [m/s]; air = (diameter (m,) [m], rho [kg/m³], wind (3,) [m/s]).
     Writes rows 8–10 the half air force a [N] (0 for a zero-length segment), 11 its drag bound
     ½ ρ C_max d l |v| [kg/s]; turns rows 0–2 into the force on end i, T u + a, and rows 5–7 into
@@ -296,14 +317,15 @@ def _run_forces(model, rows, fs, lam, fas, run, buf):
         i0 = np.uint64(a0 + c0)
         k = np.uint64(k0 + c0)
         ends = ((i0, np.uint64(a0 + c0 + s), k), c)
-        _run_law(xs, vs, law, ends, tension, buf)
         if model.air:
+            _run_law_geometry(xs, vs, law, ends, tension, buf)
             _run_air(vs, (model.diameter, model.rho, model.wind), ends, buf)
             for comp in range(3):
                 _scatter(fs[comp], buf, (comp, 5 + comp), 1.0, (i0, s, c))
                 _scatter(fas[comp], buf, (8 + comp, 8 + comp), 1.0, (i0, s, c))
             _scatter(lam, buf, (11, 11), 1.0, (i0, s, c))
         else:
+            _run_law(xs, vs, law, ends, tension, buf)
             for comp in range(3):
                 _scatter(fs[comp], buf, (comp, comp), -1.0, (i0, s, c))
         tbits = _max_bits(bits, k, c, tbits)
@@ -316,7 +338,7 @@ def _hub_link_forces(model, state, f, lam, fa):
     """Adds the forces of the hub links (Eq. 12–19: rim point, wrap, tension, air) to f (n, 3)
     [N], their air loads also to fa (n, 3) [N]; updates their wrap (m,) [rad] and tension (m,)
     [N]. Returns (torque about +z on the hub [N m], largest hub-link tension [N], dashpot
-    dissipation rate [W]); as :func:`_rope_forces`, with l̇ the rate of the straight part (the
+    dissipation rate [W]); as :func:`_block_forces`, with l̇ the rate of the straight part (the
     wound part's rate is not in the dashpot, Eq. 12–19)."""
     x = state.x
     v = state.v
