@@ -34,11 +34,27 @@ MIN_RUN = 16
 """Shortest run taken by the vector path; shorter ones join the per-segment loop."""
 
 
+def _merge_rows(runs: list) -> list:
+    """Consecutive runs (k0, 1, length, a0, 0, s) of the same length and s whose first nodes
+    step by a constant stride merged into one block (k0, rows, length, a0, stride, s)."""
+    out = []
+    for k0, _, length, a0, _, s in runs:
+        if out and out[-1][5] == s and out[-1][2] == length and out[-1][0] + out[-1][1] * length == k0 and (
+                out[-1][1] == 1 or out[-1][3] + out[-1][1] * out[-1][4] == a0):
+            first = out[-1]
+            out[-1] = (first[0], first[1] + 1, length, first[3], a0 - first[3] if first[1] == 1 else first[4], s)
+        else:
+            out.append((k0, 1, length, a0, 0, s))
+    return out
+
+
 def spring_blocks(springs: np.ndarray, hub_link: np.ndarray, min_run: int = MIN_RUN) -> np.ndarray:
-    """The segments split into blocks, in order, (b, 4) int64 rows (k0, count, a0, s): with s > 0
-    a run — segments k0 + r (0 <= r < count) join nodes (a0 + r, a0 + r + s), count >= ``min_run``,
-    no hub link; with s = 0 a block of any segments (the per-segment loop; hub links in it are
-    skipped there). ``springs`` (m, 2) node pairs, ``hub_link`` (m,) bool."""
+    """The segments split into blocks, in order, (b, 6) int64 rows (k0, rows, length, a0,
+    stride, s). With s > 0 a run of rows: segment k0 + q length + r (q < rows, r < length) joins
+    nodes a0 + q stride + r and that + s; length >= ``min_run``; no hub link (a traction net:
+    all its horizontal bars one run of rows, s = 1, its vertical bars one row, s = row length).
+    With s = 0 a block of rows × length segments of any kind (the per-segment loop; hub links
+    in it are skipped there). ``springs`` (m, 2) node pairs, ``hub_link`` (m,) bool."""
     i = springs[:, 0].astype(np.int64)
     s = springs[:, 1].astype(np.int64) - i
     ok = ~np.asarray(hub_link, dtype=bool) & (s > 0)
@@ -46,18 +62,19 @@ def spring_blocks(springs: np.ndarray, hub_link: np.ndarray, min_run: int = MIN_
     cont[1:] = ok[1:] & ok[:-1] & (i[1:] == i[:-1] + 1) & (s[1:] == s[:-1])
     starts = np.flatnonzero(~cont)
     counts = np.diff(np.append(starts, len(i)))
-    blocks, pending = [], -1  # pending: first segment of an open per-segment block
+    blocks, runs, pending = [], [], -1  # pending: first segment of an open per-segment block
     for k0, count in zip(starts.tolist(), counts.tolist()):
         if ok[k0] and count >= min_run:
             if pending >= 0:
-                blocks.append((pending, k0 - pending, 0, 0))
-                pending = -1
-            blocks.append((k0, count, int(i[k0]), int(s[k0])))
+                blocks += _merge_rows(runs) + [(pending, 1, k0 - pending, 0, 0, 0)]
+                runs, pending = [], -1
+            runs.append((k0, 1, count, int(i[k0]), 0, int(s[k0])))
         elif pending < 0:
             pending = k0
+    blocks += _merge_rows(runs)
     if pending >= 0:
-        blocks.append((pending, len(i) - pending, 0, 0))
-    return np.array(blocks, dtype=np.int64).reshape(-1, 4)
+        blocks.append((pending, 1, len(i) - pending, 0, 0, 0))
+    return np.array(blocks, dtype=np.int64).reshape(-1, 6)
 
 
 class DeployModel(NamedTuple):
@@ -70,7 +87,7 @@ class DeployModel(NamedTuple):
     [rad] rim angle of each hub link; mass (n,)
     [kg]; hub node index (-1: none); r0 hub radius [m]; half_length H/2 [m]; hub_inertia J
     [kg m²] (1 without a hub); gravity (3,) [m/s²]; rho air density [kg/m³]; wind (3,) [m/s];
-    air: aerodynamic loads on/off; blocks (b, 4) int64 the segments in runs and per-segment
+    air: aerodynamic loads on/off; blocks (b, 6) int64 the segments in runs and per-segment
     blocks (:func:`spring_blocks`). Built by ``net.state.kernel_model``.
     """
 
@@ -191,23 +208,26 @@ def _max_bits(bits, k, c, top):
 
 
 @njit(cache=True)
-def _scatter(f, buf, rows, sign, ends):
-    """Adds a run chunk's end forces to one component f (n,) of the nodes: the force on end i of
-    segment r is buf row rows[0] entry r, on its end j sign × row rows[1] entry r (sign = ±1,
-    exact); ends = (i0, s, c), segment r joins nodes i0 + r and i0 + r + s, i0 uint64. Node
-    i0 + r gets its end-j force (from segment r − s) before its end-i force (from segment r),
-    the order of the per-segment loop; three loops over node ranges, none with a conflict
-    (vectorised)."""
-    gi = np.uint64(rows[0] * CHUNK)
-    gj = np.uint64(rows[1] * CHUNK)
-    i0, s, c = ends
-    for r in range(min(s, c)):  # only end i
-        f[i0 + np.uint64(r)] += buf[gi + np.uint64(r)]
-    for r in range(s, c):  # end j, then end i
-        n = i0 + np.uint64(r)
-        f[n] = (f[n] + sign * buf[gj + np.uint64(r - s)]) + buf[gi + np.uint64(r)]
-    for r in range(max(s, c), c + s):  # only end j
-        f[i0 + np.uint64(r)] += sign * buf[gj + np.uint64(r - s)]
+def _scatter(f, buf, rows, sign, chunk):
+    """Adds a run chunk's end forces to one component f (n,) of the nodes. chunk = ((i0, s) uint64,
+    (nq, c, stride)): segment (q, r), q < nq, r < c, joins nodes i0 + q stride + r and that + s;
+    the force on its end i is entry q c + r of buf row rows[0], on its end j sign × that of row
+    rows[1] (sign = ±1, exact). Row by row, node i0 + q stride + r gets its end-j force (from
+    segment r − s) before its end-i force (from segment r), the order of the per-segment loop;
+    three loops over node ranges, none with a conflict (vectorised)."""
+    (i0, s_u), (nq, c, stride) = chunk
+    s = np.int64(s_u)
+    for q in range(nq):
+        iq = i0 + np.uint64(q * stride)
+        gi = np.uint64(rows[0] * CHUNK + q * c)
+        gj = np.uint64(rows[1] * CHUNK + q * c)
+        for r in range(min(s, c)):  # only end i
+            f[iq + np.uint64(r)] += buf[gi + np.uint64(r)]
+        for r in range(s, c):  # end j, then end i
+            n = iq + np.uint64(r)
+            f[n] = (f[n] + sign * buf[gj + np.uint64(r - s)]) + buf[gi + np.uint64(r)]
+        for r in range(max(s, c), c + s):  # only end j
+            f[iq + np.uint64(r)] += sign * buf[gj + np.uint64(r - s)]
 
 
 @njit(cache=True, inline="always")
@@ -221,115 +241,146 @@ def _law(xs, vs, law, i, j, e):
                         0.0, (rest[e], stiffness[e], damping[e], offset[e]))
 
 
+ROW = tuple(np.uint64(k * CHUNK) for k in range(12))
+"""Offsets of the rows of the run scratch (12 CHUNK,): unsigned, as every index of the run
+loops (numba tests a signed index for wrap-around, which keeps LLVM from vectorising), and
+constant, so LLVM checks the aliasing of the scratch once, not row by row."""
+
+
 @njit(cache=True, error_model="numpy")
-def _run_law(xs, vs, law, ends, tension, out):
-    """The rope law (:func:`_law`) over a run chunk: segments k + r (0 <= r < c) join nodes
-    i0 + r and j0 + r, ends = ((i0, j0, k) uint64, c). Writes tension (m,) [N] and into out
-    (12 CHUNK,), rows of CHUNK: rows 0–2 the force T u on end i [N], 3 the dissipation rate
-    (T − K s) l̇ [W]."""
-    (i0, j0, k), c = ends
+def _run_law(xs, vs, law, chunk, tension, out):
+    """The rope law (:func:`_law`) over a run chunk: chunk = ((i0, s, k) uint64, (nq, c, stride,
+    length)), segment k + q length + r (q < nq, r < c) joins nodes i0 + q stride + r and that
+    + s. Writes tension (m,) [N] and into out (12 CHUNK,) at q c + r of its rows (:data:`ROW`):
+    rows 0–2 the force T u on end i [N], 3 the dissipation rate (T − K s) l̇ [W]."""
+    (i0, s, k), (nq, c, stride, length) = chunk
     stiffness = law[1]
-    for r in range(c):
-        e = k + np.uint64(r)
-        t, u0, u1, u2, lf, ldot, stretch = _law(xs, vs, law, i0 + np.uint64(r), j0 + np.uint64(r), e)
-        tension[e] = t
-        out[r] = t * u0
-        out[CHUNK + r] = t * u1
-        out[2 * CHUNK + r] = t * u2
-        out[3 * CHUNK + r] = (t - stiffness[e] * max(stretch, 0.0)) * ldot
+    for q in range(nq):
+        iq = i0 + np.uint64(q * stride)
+        kq = k + np.uint64(q * length)
+        oq = np.uint64(q * c)
+        for r in range(c):
+            rr = np.uint64(r)
+            e = kq + rr
+            o = oq + rr
+            t, u0, u1, u2, lf, ldot, stretch = _law(xs, vs, law, iq + rr, iq + rr + s, e)
+            tension[e] = t
+            out[o] = t * u0
+            out[ROW[1] + o] = t * u1
+            out[ROW[2] + o] = t * u2
+            out[ROW[3] + o] = (t - stiffness[e] * max(stretch, 0.0)) * ldot
 
 
 @njit(cache=True, error_model="numpy")
-def _run_law_geometry(xs, vs, law, ends, tension, out):
+def _run_law_geometry(xs, vs, law, chunk, tension, out):
     """:func:`_run_law`, also writing rows 4 the straight length l [m] and 5–7 the unit vector
     u, for :func:`_run_air` (a separate function: the air-free path does not store them)."""
-    (i0, j0, k), c = ends
+    (i0, s, k), (nq, c, stride, length) = chunk
     stiffness = law[1]
-    for r in range(c):
-        e = k + np.uint64(r)
-        t, u0, u1, u2, lf, ldot, stretch = _law(xs, vs, law, i0 + np.uint64(r), j0 + np.uint64(r), e)
-        tension[e] = t
-        out[r] = t * u0
-        out[CHUNK + r] = t * u1
-        out[2 * CHUNK + r] = t * u2
-        out[3 * CHUNK + r] = (t - stiffness[e] * max(stretch, 0.0)) * ldot
-        out[4 * CHUNK + r] = lf
-        out[5 * CHUNK + r] = u0
-        out[6 * CHUNK + r] = u1
-        out[7 * CHUNK + r] = u2
+    for q in range(nq):
+        iq = i0 + np.uint64(q * stride)
+        kq = k + np.uint64(q * length)
+        oq = np.uint64(q * c)
+        for r in range(c):
+            rr = np.uint64(r)
+            e = kq + rr
+            o = oq + rr
+            t, u0, u1, u2, lf, ldot, stretch = _law(xs, vs, law, iq + rr, iq + rr + s, e)
+            tension[e] = t
+            out[o] = t * u0
+            out[ROW[1] + o] = t * u1
+            out[ROW[2] + o] = t * u2
+            out[ROW[3] + o] = (t - stiffness[e] * max(stretch, 0.0)) * ldot
+            out[ROW[4] + o] = lf
+            out[ROW[5] + o] = u0
+            out[ROW[6] + o] = u1
+            out[ROW[7] + o] = u2
 
 
 @njit(cache=True, error_model="numpy")
-def _run_air(vs, air, ends, out):
-    """Rope aerodynamics (``_segment_air``, Eq. 5–10) over a run chunk (ends as
-    :func:`_run_law`'s), after :func:`_run_law_geometry` filled rows 0–2 (T u), 4 (l), 5–7 (u) of out:
-    vs 3 velocity rows (n,) [m/s]; air = (diameter (m,) [m], rho [kg/m³], wind (3,) [m/s]).
-    Writes rows 8–10 the half air force a [N] (0 for a zero-length segment), 11 its drag bound
-    ½ ρ C_max d l |v| [kg/s]; turns rows 0–2 into the force on end i, T u + a, and rows 5–7 into
-    the force on end j, a − T u. (A separate loop: fused with the law, the loop has too many
-    arrays for the run-time alias checks LLVM accepts, and stays scalar.)"""
+def _run_air(vs, air, chunk, out):
+    """Rope aerodynamics (``_segment_air``, Eq. 5–10) over a run chunk (as :func:`_run_law`'s),
+    after :func:`_run_law_geometry` filled rows 0–2 (T u), 4 (l), 5–7 (u) of out: vs 3 velocity
+    rows (n,) [m/s]; air = (diameter (m,) [m], rho [kg/m³], wind (3,) [m/s]). Writes rows 8–10
+    the half air force a [N] (0 for a zero-length segment), 11 its drag bound ½ ρ C_max d l |v|
+    [kg/s]; turns rows 0–2 into the force on end i, T u + a, and rows 5–7 into the force on end
+    j, a − T u. (A separate loop: fused with the law, the loop has too many arrays for the
+    run-time alias checks LLVM accepts, and stays scalar.)"""
     v0, v1, v2 = vs
     diameter, rho, wind = air
-    (i0, j0, k), c = ends
-    for r in range(c):
-        i = i0 + np.uint64(r)
-        j = j0 + np.uint64(r)
-        d = diameter[k + np.uint64(r)]
-        lf = out[4 * CHUNK + r]
-        vrel = (0.5 * (v0[i] + v0[j]) - wind[0], 0.5 * (v1[i] + v1[j]) - wind[1], 0.5 * (v2[i] + v2[j]) - wind[2])
-        fx, fy, fz, vm = segment_aero_force((out[5 * CHUNK + r], out[6 * CHUNK + r], out[7 * CHUNK + r]), lf, vrel,
-                                            rho, d)
-        live = lf != 0.0
-        a0 = 0.5 * fx if live else 0.0
-        a1 = 0.5 * fy if live else 0.0
-        a2 = 0.5 * fz if live else 0.0
-        out[11 * CHUNK + r] = 0.5 * rho * C_MAX * d * lf * vm if live else 0.0
-        tu0, tu1, tu2 = out[r], out[CHUNK + r], out[2 * CHUNK + r]
-        out[r] = tu0 + a0
-        out[CHUNK + r] = tu1 + a1
-        out[2 * CHUNK + r] = tu2 + a2
-        out[5 * CHUNK + r] = a0 - tu0
-        out[6 * CHUNK + r] = a1 - tu1
-        out[7 * CHUNK + r] = a2 - tu2
-        out[8 * CHUNK + r] = a0
-        out[9 * CHUNK + r] = a1
-        out[10 * CHUNK + r] = a2
+    (i0, s, k), (nq, c, stride, length) = chunk
+    for q in range(nq):
+        iq = i0 + np.uint64(q * stride)
+        kq = k + np.uint64(q * length)
+        oq = np.uint64(q * c)
+        for r in range(c):
+            rr = np.uint64(r)
+            i = iq + rr
+            j = i + s
+            d = diameter[kq + rr]
+            o = oq + rr
+            lf = out[ROW[4] + o]
+            vrel = (0.5 * (v0[i] + v0[j]) - wind[0], 0.5 * (v1[i] + v1[j]) - wind[1],
+                    0.5 * (v2[i] + v2[j]) - wind[2])
+            fx, fy, fz, vm = segment_aero_force((out[ROW[5] + o], out[ROW[6] + o], out[ROW[7] + o]), lf, vrel,
+                                                rho, d)
+            live = lf != 0.0
+            a0 = 0.5 * fx if live else 0.0
+            a1 = 0.5 * fy if live else 0.0
+            a2 = 0.5 * fz if live else 0.0
+            out[ROW[11] + o] = 0.5 * rho * C_MAX * d * lf * vm if live else 0.0
+            tu0, tu1, tu2 = out[o], out[ROW[1] + o], out[ROW[2] + o]
+            out[o] = tu0 + a0
+            out[ROW[1] + o] = tu1 + a1
+            out[ROW[2] + o] = tu2 + a2
+            out[ROW[5] + o] = a0 - tu0
+            out[ROW[6] + o] = a1 - tu1
+            out[ROW[7] + o] = a2 - tu2
+            out[ROW[8] + o] = a0
+            out[ROW[9] + o] = a1
+            out[ROW[10] + o] = a2
 
 
 @njit(cache=True, error_model="numpy")
 def _run_forces(model, rows, fs, lam, fas, run, buf):
-    """Adds the tensions and, with air, the aerodynamics of a run (``run`` = (k0, count, a0, s),
-    :func:`spring_blocks`) to fs (3, n) [N] (and the air's to fas (3, n) [N], its drag bound to
-    lam (n,) [kg/s]); writes their tension into rows[2] (m,) [N]. rows = (3 position rows (n,)
-    [m], 3 velocity rows (n,) [m/s], tension, its int64 view); buf (12 CHUNK,) scratch. Returns
-    (the largest tension's bit pattern (:func:`_max_bits`), the dissipation rate [W]).
+    """Adds the tensions and, with air, the aerodynamics of a run (``run`` = (k0, nrows, length,
+    a0, stride, s), :func:`spring_blocks`) to fs (3, n) [N] (and the air's to fas (3, n) [N],
+    its drag bound to lam (n,) [kg/s]); writes their tension into rows[2] (m,) [N]. rows = (3
+    position rows (n,) [m], 3 velocity rows (n,) [m/s], tension, its int64 view); buf
+    (12 CHUNK,) scratch. Returns (the largest tension's bit pattern (:func:`_max_bits`), the
+    dissipation rate [W]).
 
-    Chunk by chunk: the law over contiguous node ranges (no gathers), then the forces added
-    to the nodes (:func:`_scatter`: each node in the per-segment loop's order). Offsets are
-    unsigned: numba tests signed indices for wrap-around, which keeps LLVM from vectorising."""
+    Chunk by chunk (whole rows while they fit in CHUNK, else pieces of one row): the law over
+    contiguous node ranges (no gathers), then the forces added to the nodes (:func:`_scatter`:
+    each node in the per-segment loop's order)."""
     xs, vs, tension, bits = rows
-    k0, count, a0, s = run
+    k0, nrows, length, a0, stride, s = run
     law = (model.rest, model.stiffness, model.damping, model.offset)
+    per = max(1, CHUNK // length)  # rows per chunk
+    width = min(length, CHUNK)  # segments per row of a chunk
     tbits = 0
     p_diss = 0.0
-    for c0 in range(0, count, CHUNK):
-        c = min(CHUNK, count - c0)
-        i0 = np.uint64(a0 + c0)
-        k = np.uint64(k0 + c0)
-        ends = ((i0, np.uint64(a0 + c0 + s), k), c)
-        if model.air:
-            _run_law_geometry(xs, vs, law, ends, tension, buf)
-            _run_air(vs, (model.diameter, model.rho, model.wind), ends, buf)
-            for comp in range(3):
-                _scatter(fs[comp], buf, (comp, 5 + comp), 1.0, (i0, s, c))
-                _scatter(fas[comp], buf, (8 + comp, 8 + comp), 1.0, (i0, s, c))
-            _scatter(lam, buf, (11, 11), 1.0, (i0, s, c))
-        else:
-            _run_law(xs, vs, law, ends, tension, buf)
-            for comp in range(3):
-                _scatter(fs[comp], buf, (comp, comp), -1.0, (i0, s, c))
-        tbits = _max_bits(bits, k, c, tbits)
-        p_diss += _sum(buf, 3, c)
+    for q0 in range(0, nrows, per):
+        nq = min(per, nrows - q0)
+        for r0 in range(0, length, width):
+            c = min(width, length - r0)
+            i0 = np.uint64(a0 + q0 * stride + r0)
+            k = np.uint64(k0 + q0 * length + r0)
+            chunk = ((i0, np.uint64(s), k), (nq, c, stride, length))
+            ends = ((i0, np.uint64(s)), (nq, c, stride))
+            if model.air:
+                _run_law_geometry(xs, vs, law, chunk, tension, buf)
+                _run_air(vs, (model.diameter, model.rho, model.wind), chunk, buf)
+                for comp in range(3):
+                    _scatter(fs[comp], buf, (comp, 5 + comp), 1.0, ends)
+                    _scatter(fas[comp], buf, (8 + comp, 8 + comp), 1.0, ends)
+                _scatter(lam, buf, (11, 11), 1.0, ends)
+            else:
+                _run_law(xs, vs, law, chunk, tension, buf)
+                for comp in range(3):
+                    _scatter(fs[comp], buf, (comp, comp), -1.0, ends)
+            tbits = _max_bits(bits, k, nq * c, tbits)  # whole rows or one row: contiguous
+            p_diss += _sum(buf, 3, nq * c)
     return tbits, p_diss
 
 
@@ -385,12 +436,12 @@ def _segment_forces(model, view, fs, lam, fas, buf):
     tbits = 0
     p_diss = 0.0
     for b in range(model.blocks.shape[0]):
-        k0, count, a0, s = model.blocks[b, 0], model.blocks[b, 1], model.blocks[b, 2], model.blocks[b, 3]
-        if s > 0:
-            tb, p = _run_forces(model, rows, fs, lam, fas, (k0, count, a0, s), buf)
+        blk = model.blocks[b]
+        if blk[5] > 0:
+            tb, p = _run_forces(model, rows, fs, lam, fas, (blk[0], blk[1], blk[2], blk[3], blk[4], blk[5]), buf)
             tbits = max(tbits, tb)
         else:
-            t, p = _block_forces(model, view, fs.T, lam, fas.T, k0, k0 + count)
+            t, p = _block_forces(model, view, fs.T, lam, fas.T, blk[0], blk[0] + blk[1] * blk[2])
             tmax = max(tmax, t)
         p_diss += p
     return max(tmax, np.int64(tbits).view(np.float64)), p_diss

@@ -11,43 +11,51 @@ from flexnet_fe.net.state import Environment, initial_state, kernel_model, kerne
 from flexnet_fe.net.timestep import spring_limit
 from flexnet_fe.net.topology import build_rotary, build_traction
 
-# 21 x 21 knots: rows of 20 bars (runs of s = 1, above MIN_RUN) and one layer run of 420 (s = 21,
-# two chunks); ropes 1 cm longer than the bars, so that some segments stay slack
+# 21 x 21 knots: 21 rows of 20 bars (s = 1, above MIN_RUN; 12 rows per chunk, so two chunks) and one
+# layer of 420 (s = 21, two chunks); ropes 1 cm longer than the bars, so that some segments stay slack
 NET = TractionNet(edge_length=1.0, mesh_size=0.05, corner_mass=0.2, corner_speed=30.0, launch_elevation_deg=20.0,
                   slack_offset=-0.01)
 
 
 def _covered_in_order(blocks: np.ndarray, m: int) -> bool:
-    starts, counts = blocks[:, 0], blocks[:, 1]
-    return starts[0] == 0 and np.array_equal(starts[1:], (starts + counts)[:-1]) and starts[-1] + counts[-1] == m
+    starts, sizes = blocks[:, 0], blocks[:, 1] * blocks[:, 2]
+    return starts[0] == 0 and np.array_equal(starts[1:], (starts + sizes)[:-1]) and starts[-1] + sizes[-1] == m
 
 
-def test_traction_blocks_are_rows_and_one_layer():
+def _run_segments(run) -> tuple[np.ndarray, np.ndarray]:
+    """(segment indices, their (i, j) node pairs as the run describes them) of a run block."""
+    k0, rows, length, a0, stride, s = run
+    q, r = np.divmod(np.arange(rows * length), length)
+    i = a0 + q * stride + r
+    return k0 + q * length + r, np.column_stack([i, i + s])
+
+
+def test_traction_blocks_are_the_rows_and_the_layer():
     model = build_traction(NET)
     b = model.kernel_blocks
     assert _covered_in_order(b, model.n_springs)
-    assert (b[:, 3] > 0).all()  # every segment in a run
-    assert np.array_equal(b[:-1, 1], np.full(21, 20)) and (b[:-1, 3] == 1).all()
-    assert b[-1, 1] == 20 * 21 and b[-1, 3] == 21
-    for k0, count, a0, s in b:  # segment k0 + r joins (a0 + r, a0 + r + s)
-        r = np.arange(count)
-        assert np.array_equal(model.springs[k0 + r], np.column_stack([a0 + r, a0 + r + s]))
+    assert b.tolist() == [[0, 21, 20, 0, 21, 1], [420, 1, 420, 0, 0, 21]]  # 21 rows of 20 bars; one layer
+    for run in b:
+        k, ends = _run_segments(run)
+        assert np.array_equal(model.springs[k], ends)
 
 
 def test_rotary_blocks_cover_every_segment_and_skip_hub_links():
     model = build_rotary(RotaryNet())
     b = model.kernel_blocks
     assert _covered_in_order(b, model.n_springs)
-    for k0, count, a0, s in b[b[:, 3] > 0]:
-        r = np.arange(count)
-        assert count >= MIN_RUN and not model.hub_link[k0 + r].any()
-        assert np.array_equal(model.springs[k0 + r], np.column_stack([a0 + r, a0 + r + s]))
+    for run in b[b[:, 5] > 0]:
+        k, ends = _run_segments(run)
+        assert run[2] >= MIN_RUN and not model.hub_link[k].any()
+        assert np.array_equal(model.springs[k], ends)
 
 
 def test_short_and_irregular_segments_take_the_per_segment_loop():
-    springs = np.array([[0, 1], [1, 2], [5, 3], [3, 4]] + [[10 + r, 12 + r] for r in range(MIN_RUN)])
+    springs = np.array([[0, 1], [1, 2], [5, 3], [3, 4]] + [[10 + r, 12 + r] for r in range(MIN_RUN)]
+                       + [[40 + r, 42 + r] for r in range(MIN_RUN)] + [[70 + r, 72 + r] for r in range(MIN_RUN)])
     b = spring_blocks(springs, np.zeros(len(springs), bool))
-    assert b.tolist() == [[0, 4, 0, 0], [4, MIN_RUN, 10, 2]]
+    # rows starting at nodes 10, 40, 70: a constant stride of 30, so one block of three rows
+    assert b.tolist() == [[0, 1, 4, 0, 0, 0], [4, 3, MIN_RUN, 10, 30, 2]]
 
 
 @pytest.mark.parametrize("air", [False, True], ids=["air_off", "air_on"])
@@ -55,7 +63,7 @@ def test_runs_give_the_per_segment_trajectory_to_the_bit(air):
     model = build_traction(NET)
     env = Environment(np.array([0.0, -9.81, 0.0]), 0.5 if air else 0.0, np.array([3.0, 0.0, -1.0]), air)
     runs = kernel_model(model, env)
-    loop = runs._replace(blocks=np.array([[0, model.n_springs, 0, 0]], dtype=np.int64))
+    loop = runs._replace(blocks=np.array([[0, 1, model.n_springs, 0, 0, 0]], dtype=np.int64))
     dt = 0.25 * spring_limit(model)
     a, b = initial_state(model, (0.0, 0.0, 20.0)), initial_state(model, (0.0, 0.0, 20.0))
     out_a = advance(runs, kernel_state(a), 300, dt)
