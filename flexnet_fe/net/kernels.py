@@ -36,15 +36,16 @@ MIN_RUN = 16
 
 def _merge_rows(runs: list) -> list:
     """Consecutive runs (k0, 1, length, a0, 0, s) of the same length and s whose first nodes
-    step by a constant stride merged into one block (k0, rows, length, a0, stride, s)."""
+    step up by a constant stride merged into one block (k0, rows, length, a0, stride, s)."""
     out = []
     for k0, _, length, a0, _, s in runs:
-        if out and out[-1][5] == s and out[-1][2] == length and out[-1][0] + out[-1][1] * length == k0 and (
-                out[-1][1] == 1 or out[-1][3] + out[-1][1] * out[-1][4] == a0):
-            first = out[-1]
-            out[-1] = (first[0], first[1] + 1, length, first[3], a0 - first[3] if first[1] == 1 else first[4], s)
-        else:
-            out.append((k0, 1, length, a0, 0, s))
+        if out and out[-1][5] == s and out[-1][2] == length and out[-1][0] + out[-1][1] * length == k0:
+            first_k0, rows, _, first_a0, stride, _ = out[-1]
+            step = a0 - first_a0 if rows == 1 else stride
+            if step > 0 and first_a0 + rows * step == a0:
+                out[-1] = (first_k0, rows + 1, length, first_a0, step, s)
+                continue
+        out.append((k0, 1, length, a0, 0, s))
     return out
 
 

@@ -73,3 +73,9 @@ def test_runs_give_the_per_segment_trajectory_to_the_bit(air):
     assert out_a == out_b  # peak tension, drag number
     # the dissipation and the air's work are sums: the run path adds them in another order
     assert a.losses == pytest.approx(b.losses, rel=1e-12, abs=1e-15)
+
+
+def test_rows_stepping_down_stay_separate_runs():
+    springs = np.array([[70 + r, 71 + r] for r in range(MIN_RUN)] + [[40 + r, 41 + r] for r in range(MIN_RUN)])
+    b = spring_blocks(springs, np.zeros(len(springs), bool))
+    assert b.tolist() == [[0, 1, MIN_RUN, 70, 0, 1], [MIN_RUN, 1, MIN_RUN, 40, 0, 1]]
