@@ -143,8 +143,6 @@ def _segment_air(model, v, s, ends, u, lf, vi, lam):
     return 0.5 * fx, 0.5 * fy, 0.5 * fz
 
 
-
-
 @njit(cache=True, error_model="numpy")
 def _block_forces(model, state, f, lam, fa, k0, k1):
     """Adds the tensions (Eq. 1–4) and, with air, the aerodynamics (Eq. 5–10) of segments
@@ -575,7 +573,7 @@ def advance(model, state, n_steps, dt):
             losses[1] += 0.5 * dt * (w_air - inv_m * (fa_sum[0] * vc_sum[0] + fa_sum[1] * vc_sum[1]
                                                       + fa_sum[2] * vc_sum[2]))
             fas[:, :] = 0.0
-        drag_number = _drag_number(lam, rate, drag_number)
+            drag_number = _drag_number(lam, rate, drag_number)  # lam stays 0 without air
         _update(xs, vs, fs, rate, mass, model.gravity, dt)
         if model.hub >= 0:
             state.hub[1] += dt * torque / model.hub_inertia

@@ -108,7 +108,7 @@ class NetModel:
 
     @cached_property
     def kernel_blocks(self) -> np.ndarray:
-        """The segments in runs and per-segment blocks, (b, 4) int64, for the deploy kernel
+        """The segments in runs and per-segment blocks, (b, 6) int64, for the deploy kernel
         (``net.kernels.spring_blocks``; computed once, read-only)."""
         return _frozen(spring_blocks(self.springs, self.hub_link))
 
