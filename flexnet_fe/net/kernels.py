@@ -5,6 +5,16 @@ steps: v_{n+1/2} = v_{n-1/2} + dt f(x_n, v_{n-1/2}) / m ; x_{n+1} = x_n + dt v_{
 Second-order in positions for conservative forces; it conserves linear momentum and (for
 central forces) angular momentum exactly. For a spring-dashpot with damping evaluated at the
 lagged velocity the stability limit is ω dt <= 2 (√(1+ζ²) - ζ) (see ``timestep.py``).
+
+Layout: inside a call the positions, velocities and forces are held as (3, n) arrays (one
+contiguous row per component). A regular net's segments come in runs k0 … k0+L−1 joining nodes
+(a0 + r, a0 + r + s): a row of horizontal bars (s = 1) or a layer of vertical ones (s = the row
+length) (:func:`spring_blocks`). Over a run the end values are contiguous, so the rope law is
+evaluated in SIMD registers without gathers (AVX-512 on this machine's EPYC), chunk by chunk into
+an L1-sized scratch, and the forces are added to the nodes in conflict-free loops that give every
+node its contributions in the order of the segment-by-segment loop: tensions, forces and
+trajectories are the same to the bit (only the summed dissipation and air work are added in
+another order). The other segments (hub links, short runs) take the per-segment loop.
 """
 
 from __future__ import annotations
@@ -18,6 +28,54 @@ from flexnet_fe.net.forces import C_CROSS, CD_FRICTION, segment_aero_force, spri
 from flexnet_fe.net.hub import hub_link_state
 
 C_MAX = CD_FRICTION + C_CROSS
+CHUNK = 256
+"""Segments of a run evaluated per pass: the pass's scratch (12 × 256 floats) stays in L1."""
+MIN_RUN = 16
+"""Shortest run taken by the vector path; shorter ones join the per-segment loop."""
+
+
+def _merge_rows(runs: list) -> list:
+    """Consecutive runs (k0, 1, length, a0, 0, s) of the same length and s whose first nodes
+    step up by a constant stride merged into one block (k0, rows, length, a0, stride, s)."""
+    out = []
+    for k0, _, length, a0, _, s in runs:
+        if out and out[-1][5] == s and out[-1][2] == length and out[-1][0] + out[-1][1] * length == k0:
+            first_k0, rows, _, first_a0, stride, _ = out[-1]
+            step = a0 - first_a0 if rows == 1 else stride
+            if step > 0 and first_a0 + rows * step == a0:
+                out[-1] = (first_k0, rows + 1, length, first_a0, step, s)
+                continue
+        out.append((k0, 1, length, a0, 0, s))
+    return out
+
+
+def spring_blocks(springs: np.ndarray, hub_link: np.ndarray, min_run: int = MIN_RUN) -> np.ndarray:
+    """The segments split into blocks, in order, (b, 6) int64 rows (k0, rows, length, a0,
+    stride, s). With s > 0 a run of rows: segment k0 + q length + r (q < rows, r < length) joins
+    nodes a0 + q stride + r and that + s; length >= ``min_run``; no hub link (a traction net:
+    all its horizontal bars one run of rows, s = 1, its vertical bars one row, s = row length).
+    With s = 0 a block of rows × length segments of any kind (the per-segment loop; hub links
+    in it are skipped there). ``springs`` (m, 2) node pairs, ``hub_link`` (m,) bool."""
+    i = springs[:, 0].astype(np.int64)
+    s = springs[:, 1].astype(np.int64) - i
+    ok = ~np.asarray(hub_link, dtype=bool) & (s > 0)
+    cont = np.zeros(len(i), dtype=bool)  # segment k continues the run of segment k - 1
+    cont[1:] = ok[1:] & ok[:-1] & (i[1:] == i[:-1] + 1) & (s[1:] == s[:-1])
+    starts = np.flatnonzero(~cont)
+    counts = np.diff(np.append(starts, len(i)))
+    blocks, runs, pending = [], [], -1  # pending: first segment of an open per-segment block
+    for k0, count in zip(starts.tolist(), counts.tolist()):
+        if ok[k0] and count >= min_run:
+            if pending >= 0:
+                blocks += _merge_rows(runs) + [(pending, 1, k0 - pending, 0, 0, 0)]
+                runs, pending = [], -1
+            runs.append((k0, 1, count, int(i[k0]), 0, int(s[k0])))
+        elif pending < 0:
+            pending = k0
+    blocks += _merge_rows(runs)
+    if pending >= 0:
+        blocks.append((pending, 1, len(i) - pending, 0, 0, 0))
+    return np.array(blocks, dtype=np.int64).reshape(-1, 6)
 
 
 class DeployModel(NamedTuple):
@@ -30,7 +88,8 @@ class DeployModel(NamedTuple):
     [rad] rim angle of each hub link; mass (n,)
     [kg]; hub node index (-1: none); r0 hub radius [m]; half_length H/2 [m]; hub_inertia J
     [kg m²] (1 without a hub); gravity (3,) [m/s²]; rho air density [kg/m³]; wind (3,) [m/s];
-    air: aerodynamic loads on/off. Built by ``net.state.kernel_model``.
+    air: aerodynamic loads on/off; blocks (b, 6) int64 the segments in runs and per-segment
+    blocks (:func:`spring_blocks`). Built by ``net.state.kernel_model``.
     """
 
     springs: np.ndarray
@@ -51,6 +110,7 @@ class DeployModel(NamedTuple):
     rho: float
     wind: np.ndarray
     air: bool
+    blocks: np.ndarray
 
 
 class DeployState(NamedTuple):
@@ -84,14 +144,14 @@ def _segment_air(model, v, s, ends, u, lf, vi, lam):
 
 
 @njit(cache=True, error_model="numpy")
-def _rope_forces(model, state, f, lam, fa):
-    """Adds the tensions (Eq. 1–4) and, with air, the aerodynamics (Eq. 5–10) of every segment
-    that is not a hub link to f (n, 3) [N], the aerodynamics also to fa (n, 3) [N]; writes their
-    tension (m,) [N]. Returns (the largest tension [N], the dashpots' dissipation rate
-    Σ (T − K s) l̇ [W] at the step's lagged velocities).
+def _block_forces(model, state, f, lam, fa, k0, k1):
+    """Adds the tensions (Eq. 1–4) and, with air, the aerodynamics (Eq. 5–10) of segments
+    k0 … k1−1 that are not hub links to f (n, 3) [N], the aerodynamics also to fa (n, 3) [N];
+    writes their tension (m,) [N]. Returns (the largest tension [N], the dashpots' dissipation
+    rate Σ (T − K s) l̇ [W] at the step's lagged velocities).
 
-    The hot loop of the deploy stage: one pass over the segments, node indices unsigned (no
-    negative-index wrap test), no allocation, no branch but the slack test inside the law."""
+    The per-segment loop (gathers and scatters through the node indices): the segments that
+    are not in a run (:func:`spring_blocks`)."""
     x = state.x
     v = state.v
     tension = state.tension
@@ -104,7 +164,7 @@ def _rope_forces(model, state, f, lam, fa):
     air = model.air
     tmax = 0.0
     p_diss = 0.0
-    for s in range(springs.shape[0]):
+    for s in range(k0, k1):
         if hub_link[s]:
             continue
         i = springs[s, 0]
@@ -126,12 +186,209 @@ def _rope_forces(model, state, f, lam, fa):
     return tmax, p_diss
 
 
+@njit(cache=True, fastmath={"reassoc", "nsz"})
+def _sum(buf, row, c):
+    """Σ of the first c entries of row ``row`` of the run scratch (:func:`_run_law`), reassociated
+    (vector partial sums: order-dependent round-off)."""
+    total = 0.0
+    for r in range(c):
+        total += buf[row * CHUNK + r]
+    return total
+
+
+@njit(cache=True)
+def _max_bits(bits, k, c, top):
+    """max(top, bits[k … k+c−1]) (int64): the bit patterns of tensions >= +0 (or NaN), whose
+    order is the order of the values, and an integer max vectorises where LLVM leaves a float
+    max scalar. k (uint64) the first segment; start from top = 0 (+0.0)."""
+    for r in range(c):
+        top = max(top, bits[k + np.uint64(r)])
+    return top
+
+
+@njit(cache=True)
+def _scatter(f, buf, rows, sign, chunk):
+    """Adds a run chunk's end forces to one component f (n,) of the nodes. chunk = ((i0, s) uint64,
+    (nq, c, stride)): segment (q, r), q < nq, r < c, joins nodes i0 + q stride + r and that + s;
+    the force on its end i is entry q c + r of buf row rows[0], on its end j sign × that of row
+    rows[1] (sign = ±1, exact). Row by row, node i0 + q stride + r gets its end-j force (from
+    segment r − s) before its end-i force (from segment r), the order of the per-segment loop;
+    three loops over node ranges, none with a conflict (vectorised)."""
+    (i0, s_u), (nq, c, stride) = chunk
+    s = np.int64(s_u)
+    for q in range(nq):
+        iq = i0 + np.uint64(q * stride)
+        gi = np.uint64(rows[0] * CHUNK + q * c)
+        gj = np.uint64(rows[1] * CHUNK + q * c)
+        for r in range(min(s, c)):  # only end i
+            f[iq + np.uint64(r)] += buf[gi + np.uint64(r)]
+        for r in range(s, c):  # end j, then end i
+            n = iq + np.uint64(r)
+            f[n] = (f[n] + sign * buf[gj + np.uint64(r - s)]) + buf[gi + np.uint64(r)]
+        for r in range(max(s, c), c + s):  # only end j
+            f[iq + np.uint64(r)] += sign * buf[gj + np.uint64(r - s)]
+
+
+@njit(cache=True, inline="always")
+def _law(xs, vs, law, i, j, e):
+    """``forces.spring_force`` of segment e joining nodes i, j: xs, vs 3 rows (n,) each of
+    positions [m] and velocities [m/s]; law = (rest, stiffness, damping, offset) (m,)."""
+    x0, x1, x2 = xs
+    v0, v1, v2 = vs
+    rest, stiffness, damping, offset = law
+    return spring_force((x0[j] - x0[i], x1[j] - x1[i], x2[j] - x2[i]), (v0[j] - v0[i], v1[j] - v1[i], v2[j] - v2[i]),
+                        0.0, (rest[e], stiffness[e], damping[e], offset[e]))
+
+
+ROW = tuple(np.uint64(k * CHUNK) for k in range(12))
+"""Offsets of the rows of the run scratch (12 CHUNK,): unsigned, as every index of the run
+loops (numba tests a signed index for wrap-around, which keeps LLVM from vectorising), and
+constant, so LLVM checks the aliasing of the scratch once, not row by row."""
+
+
+@njit(cache=True, error_model="numpy")
+def _run_law(xs, vs, law, chunk, tension, out):
+    """The rope law (:func:`_law`) over a run chunk: chunk = ((i0, s, k) uint64, (nq, c, stride,
+    length)), segment k + q length + r (q < nq, r < c) joins nodes i0 + q stride + r and that
+    + s. Writes tension (m,) [N] and into out (12 CHUNK,) at q c + r of its rows (:data:`ROW`):
+    rows 0–2 the force T u on end i [N], 3 the dissipation rate (T − K s) l̇ [W]."""
+    (i0, s, k), (nq, c, stride, length) = chunk
+    stiffness = law[1]
+    for q in range(nq):
+        iq = i0 + np.uint64(q * stride)
+        kq = k + np.uint64(q * length)
+        oq = np.uint64(q * c)
+        for r in range(c):
+            rr = np.uint64(r)
+            e = kq + rr
+            o = oq + rr
+            t, u0, u1, u2, lf, ldot, stretch = _law(xs, vs, law, iq + rr, iq + rr + s, e)
+            tension[e] = t
+            out[o] = t * u0
+            out[ROW[1] + o] = t * u1
+            out[ROW[2] + o] = t * u2
+            out[ROW[3] + o] = (t - stiffness[e] * max(stretch, 0.0)) * ldot
+
+
+@njit(cache=True, error_model="numpy")
+def _run_law_geometry(xs, vs, law, chunk, tension, out):
+    """:func:`_run_law`, also writing rows 4 the straight length l [m] and 5–7 the unit vector
+    u, for :func:`_run_air` (a separate function: the air-free path does not store them)."""
+    (i0, s, k), (nq, c, stride, length) = chunk
+    stiffness = law[1]
+    for q in range(nq):
+        iq = i0 + np.uint64(q * stride)
+        kq = k + np.uint64(q * length)
+        oq = np.uint64(q * c)
+        for r in range(c):
+            rr = np.uint64(r)
+            e = kq + rr
+            o = oq + rr
+            t, u0, u1, u2, lf, ldot, stretch = _law(xs, vs, law, iq + rr, iq + rr + s, e)
+            tension[e] = t
+            out[o] = t * u0
+            out[ROW[1] + o] = t * u1
+            out[ROW[2] + o] = t * u2
+            out[ROW[3] + o] = (t - stiffness[e] * max(stretch, 0.0)) * ldot
+            out[ROW[4] + o] = lf
+            out[ROW[5] + o] = u0
+            out[ROW[6] + o] = u1
+            out[ROW[7] + o] = u2
+
+
+@njit(cache=True, error_model="numpy")
+def _run_air(vs, air, chunk, out):
+    """Rope aerodynamics (``_segment_air``, Eq. 5–10) over a run chunk (as :func:`_run_law`'s),
+    after :func:`_run_law_geometry` filled rows 0–2 (T u), 4 (l), 5–7 (u) of out: vs 3 velocity
+    rows (n,) [m/s]; air = (diameter (m,) [m], rho [kg/m³], wind (3,) [m/s]). Writes rows 8–10
+    the half air force a [N] (0 for a zero-length segment), 11 its drag bound ½ ρ C_max d l |v|
+    [kg/s]; turns rows 0–2 into the force on end i, T u + a, and rows 5–7 into the force on end
+    j, a − T u. (A separate loop: fused with the law, the loop has too many arrays for the
+    run-time alias checks LLVM accepts, and stays scalar.)"""
+    v0, v1, v2 = vs
+    diameter, rho, wind = air
+    (i0, s, k), (nq, c, stride, length) = chunk
+    for q in range(nq):
+        iq = i0 + np.uint64(q * stride)
+        kq = k + np.uint64(q * length)
+        oq = np.uint64(q * c)
+        for r in range(c):
+            rr = np.uint64(r)
+            i = iq + rr
+            j = i + s
+            d = diameter[kq + rr]
+            o = oq + rr
+            lf = out[ROW[4] + o]
+            vrel = (0.5 * (v0[i] + v0[j]) - wind[0], 0.5 * (v1[i] + v1[j]) - wind[1],
+                    0.5 * (v2[i] + v2[j]) - wind[2])
+            fx, fy, fz, vm = segment_aero_force((out[ROW[5] + o], out[ROW[6] + o], out[ROW[7] + o]), lf, vrel,
+                                                rho, d)
+            live = lf != 0.0
+            a0 = 0.5 * fx if live else 0.0
+            a1 = 0.5 * fy if live else 0.0
+            a2 = 0.5 * fz if live else 0.0
+            out[ROW[11] + o] = 0.5 * rho * C_MAX * d * lf * vm if live else 0.0
+            tu0, tu1, tu2 = out[o], out[ROW[1] + o], out[ROW[2] + o]
+            out[o] = tu0 + a0
+            out[ROW[1] + o] = tu1 + a1
+            out[ROW[2] + o] = tu2 + a2
+            out[ROW[5] + o] = a0 - tu0
+            out[ROW[6] + o] = a1 - tu1
+            out[ROW[7] + o] = a2 - tu2
+            out[ROW[8] + o] = a0
+            out[ROW[9] + o] = a1
+            out[ROW[10] + o] = a2
+
+
+@njit(cache=True, error_model="numpy")
+def _run_forces(model, rows, fs, lam, fas, run, buf):
+    """Adds the tensions and, with air, the aerodynamics of a run (``run`` = (k0, nrows, length,
+    a0, stride, s), :func:`spring_blocks`) to fs (3, n) [N] (and the air's to fas (3, n) [N],
+    its drag bound to lam (n,) [kg/s]); writes their tension into rows[2] (m,) [N]. rows = (3
+    position rows (n,) [m], 3 velocity rows (n,) [m/s], tension, its int64 view); buf
+    (12 CHUNK,) scratch. Returns (the largest tension's bit pattern (:func:`_max_bits`), the
+    dissipation rate [W]).
+
+    Chunk by chunk (whole rows while they fit in CHUNK, else pieces of one row): the law over
+    contiguous node ranges (no gathers), then the forces added to the nodes (:func:`_scatter`:
+    each node in the per-segment loop's order)."""
+    xs, vs, tension, bits = rows
+    k0, nrows, length, a0, stride, s = run
+    law = (model.rest, model.stiffness, model.damping, model.offset)
+    per = max(1, CHUNK // length)  # rows per chunk
+    width = min(length, CHUNK)  # segments per row of a chunk
+    tbits = 0
+    p_diss = 0.0
+    for q0 in range(0, nrows, per):
+        nq = min(per, nrows - q0)
+        for r0 in range(0, length, width):
+            c = min(width, length - r0)
+            i0 = np.uint64(a0 + q0 * stride + r0)
+            k = np.uint64(k0 + q0 * length + r0)
+            chunk = ((i0, np.uint64(s), k), (nq, c, stride, length))
+            ends = ((i0, np.uint64(s)), (nq, c, stride))
+            if model.air:
+                _run_law_geometry(xs, vs, law, chunk, tension, buf)
+                _run_air(vs, (model.diameter, model.rho, model.wind), chunk, buf)
+                for comp in range(3):
+                    _scatter(fs[comp], buf, (comp, 5 + comp), 1.0, ends)
+                    _scatter(fas[comp], buf, (8 + comp, 8 + comp), 1.0, ends)
+                _scatter(lam, buf, (11, 11), 1.0, ends)
+            else:
+                _run_law(xs, vs, law, chunk, tension, buf)
+                for comp in range(3):
+                    _scatter(fs[comp], buf, (comp, comp), -1.0, ends)
+            tbits = _max_bits(bits, k, nq * c, tbits)  # whole rows or one row: contiguous
+            p_diss += _sum(buf, 3, nq * c)
+    return tbits, p_diss
+
+
 @njit(cache=True, error_model="numpy")
 def _hub_link_forces(model, state, f, lam, fa):
     """Adds the forces of the hub links (Eq. 12–19: rim point, wrap, tension, air) to f (n, 3)
     [N], their air loads also to fa (n, 3) [N]; updates their wrap (m,) [rad] and tension (m,)
     [N]. Returns (torque about +z on the hub [N m], largest hub-link tension [N], dashpot
-    dissipation rate [W]); as :func:`_rope_forces`, with l̇ the rate of the straight part (the
+    dissipation rate [W]); as :func:`_block_forces`, with l̇ the rate of the straight part (the
     wound part's rate is not in the dashpot, Eq. 12–19)."""
     x = state.x
     v = state.v
@@ -165,12 +422,54 @@ def _hub_link_forces(model, state, f, lam, fa):
 
 
 @njit(cache=True)
-def _weights(model, f):
-    """f[i] = m_i g (n, 3) [N]."""
-    for i in range(f.shape[0]):
-        f[i, 0] = model.mass[i] * model.gravity[0]
-        f[i, 1] = model.mass[i] * model.gravity[1]
-        f[i, 2] = model.mass[i] * model.gravity[2]
+def _segment_forces(model, view, fs, lam, fas, buf):
+    """Adds the forces of every segment that is not a hub link (runs by :func:`_run_forces`,
+    the rest by :func:`_block_forces`, in the order of ``model.blocks``) to fs (3, n) [N], their
+    air loads to fas (3, n) [N] and drag bounds to lam (n,) [kg/s]; writes their tension.
+    ``view`` a DeployState whose x, v are the transposes of (3, n) arrays. Returns (the largest
+    tension [N], the dissipation rate [W])."""
+    xs = view.x.T
+    vs = view.v.T
+    rows = ((xs[0], xs[1], xs[2]), (vs[0], vs[1], vs[2]), view.tension, view.tension.view(np.int64))
+    tmax = 0.0
+    tbits = 0
+    p_diss = 0.0
+    for b in range(model.blocks.shape[0]):
+        blk = model.blocks[b]
+        if blk[5] > 0:
+            tb, p = _run_forces(model, rows, fs, lam, fas, (blk[0], blk[1], blk[2], blk[3], blk[4], blk[5]), buf)
+            tbits = max(tbits, tb)
+        else:
+            t, p = _block_forces(model, view, fs.T, lam, fas.T, blk[0], blk[0] + blk[1] * blk[2])
+            tmax = max(tmax, t)
+        p_diss += p
+    return max(tmax, np.int64(tbits).view(np.float64)), p_diss
+
+
+@njit(cache=True)
+def _weights(model, fs):
+    """fs[:, i] = m_i g, fs (3, n) [N]."""
+    for k in range(3):
+        for i in range(fs.shape[1]):
+            fs[k, i] = model.mass[i] * model.gravity[k]
+
+
+@njit(cache=True)
+def _components(a):
+    """The (3, n) copy of an (n, 3) array (one contiguous row per component)."""
+    out = np.empty((3, a.shape[0]))
+    for i in range(a.shape[0]):
+        for k in range(3):
+            out[k, i] = a[i, k]
+    return out
+
+
+@njit(cache=True)
+def _soa_view(state):
+    """(xs, vs, view): the (3, n) copies of the state's x, v and a DeployState seeing them as (n, 3)."""
+    xs = _components(state.x)
+    vs = _components(state.v)
+    return xs, vs, DeployState(xs.T, vs.T, state.hub, state.wrap, state.tension, state.losses)
 
 
 @njit(cache=True)
@@ -183,11 +482,59 @@ def net_forces(model, state, f, lam):
     lam (n,) [kg/s]: accumulates, per node, a Gershgorin bound of the drag's velocity
     derivative Σ_s ½ ρ C_max d l |v_s| (the caller divides by m).
     """
-    _weights(model, f)
-    fa = np.zeros(f.shape)
-    tmax, _ = _rope_forces(model, state, f, lam, fa)
-    torque, tlink, _ = _hub_link_forces(model, state, f, lam, fa)
+    xs, vs, view = _soa_view(state)
+    fs = np.empty(xs.shape)
+    fas = np.zeros(xs.shape)
+    _weights(model, fs)
+    tmax, _ = _segment_forces(model, view, fs, lam, fas, np.empty(12 * CHUNK))
+    torque, tlink, _ = _hub_link_forces(model, view, fs.T, lam, fas.T)
+    f[:, :] = fs.T
     return torque, max(tmax, tlink)
+
+
+@njit(cache=True, fastmath={"reassoc", "nsz"})
+def _air_work(fas, vs, fs, rate, mass):
+    """The air's work terms of one step (before the update): (Σ fa·(2v + a f), Σ fa (3,),
+    Σ m (2v + a f) (3,)), fa = fas, v = vs, f = fs (3, n), a = rate (n,) = dt / m [s/kg],
+    mass (n,) [kg]; reassociated sums."""
+    w_air = 0.0
+    fa_sum = np.zeros(3)
+    vc_sum = np.zeros(3)
+    for k in range(3):
+        fk, vk, ak = fas[k], vs[k], fs[k]
+        sw = sf = sv = 0.0
+        for i in range(fk.shape[0]):
+            dv = 2.0 * vk[i] + rate[i] * ak[i]
+            sw += fk[i] * dv
+            sf += fk[i]
+            sv += mass[i] * dv
+        w_air += sw
+        fa_sum[k] = sf
+        vc_sum[k] = sv
+    return w_air, fa_sum, vc_sum
+
+
+@njit(cache=True)
+def _drag_number(lam, rate, top):
+    """max(top, max λ_i a_i) (the drag stability number λ dt, λ = lam (n,) [kg/s] >= 0, a =
+    rate (n,) = dt / m [s/kg]); resets lam to 0."""
+    for i in range(lam.shape[0]):
+        lam[i] *= rate[i]
+    top = max(top, np.int64(_max_bits(lam.view(np.int64), np.uint64(0), lam.shape[0], 0)).view(np.float64))
+    lam[:] = 0.0
+    return top
+
+
+@njit(cache=True)
+def _update(xs, vs, fs, rate, mass, gravity, dt):
+    """Symplectic Euler on (3, n) arrays: v += a f, x += dt v (a = rate = dt / m (n,) [s/kg]),
+    then fs reset to the weights m g [N] for the next step."""
+    for k in range(3):
+        x, v, f, g = xs[k], vs[k], fs[k], gravity[k]
+        for i in range(x.shape[0]):
+            v[i] += rate[i] * f[i]
+            x[i] += dt * v[i]
+            f[i] = mass[i] * g
 
 
 @njit(cache=True, error_model="numpy")
@@ -204,55 +551,33 @@ def advance(model, state, n_steps, dt):
     step changes that kinetic energy by Σ F_i·(v̄_i − v̄_c) dt, v̄ the mean of the velocities
     before and after it, and the weights' share of that sum is zero.
     """
-    x = state.x
-    v = state.v
     mass = model.mass
-    g0 = model.gravity[0]
-    g1 = model.gravity[1]
-    g2 = model.gravity[2]
-    n = x.shape[0]
-    f = np.empty((n, 3))
-    fa = np.zeros((n, 3))
-    lam = np.zeros(n)
-    _weights(model, f)
+    xs, vs, view = _soa_view(state)
+    fs = np.empty(xs.shape)
+    fas = np.zeros(xs.shape)
+    lam = np.zeros(mass.shape[0])
+    buf = np.empty(12 * CHUNK)
+    rate = dt / mass
+    _weights(model, fs)
     peak = 0.0
     drag_number = 0.0
     inv_m = 1.0 / mass.sum()
     losses = state.losses
-    fa_sum = np.zeros(3)               # Σ fa_i
-    vc_sum = np.zeros(3)               # Σ m_i (v_old + v_new)_i
     for step in range(n_steps):
-        tmax, p_diss = _rope_forces(model, state, f, lam, fa)
-        torque, tlink, q_diss = _hub_link_forces(model, state, f, lam, fa)
+        tmax, p_diss = _segment_forces(model, view, fs, lam, fas, buf)
+        torque, tlink, q_diss = _hub_link_forces(model, view, fs.T, lam, fas.T)
         peak = max(peak, tmax, tlink)
         losses[0] += dt * (p_diss + q_diss)
-        w_air = 0.0                    # Σ fa_i · (v_old + v_new)_i
-        fa_sum[:] = 0.0
-        vc_sum[:] = 0.0
-        for i in range(n):  # update, and reset f to the weights for the next step
-            a = dt / mass[i]
-            if lam[i] != 0.0:
-                drag_number = max(drag_number, lam[i] * a)
-                lam[i] = 0.0
-            if model.air:
-                for k in range(3):
-                    w_air += fa[i, k] * (2.0 * v[i, k] + a * f[i, k])
-                    fa_sum[k] += fa[i, k]
-                    vc_sum[k] += mass[i] * (2.0 * v[i, k] + a * f[i, k])
-                    fa[i, k] = 0.0
-            v[i, 0] += a * f[i, 0]
-            v[i, 1] += a * f[i, 1]
-            v[i, 2] += a * f[i, 2]
-            x[i, 0] += dt * v[i, 0]
-            x[i, 1] += dt * v[i, 1]
-            x[i, 2] += dt * v[i, 2]
-            f[i, 0] = mass[i] * g0
-            f[i, 1] = mass[i] * g1
-            f[i, 2] = mass[i] * g2
         if model.air:
+            w_air, fa_sum, vc_sum = _air_work(fas, vs, fs, rate, mass)
             losses[1] += 0.5 * dt * (w_air - inv_m * (fa_sum[0] * vc_sum[0] + fa_sum[1] * vc_sum[1]
                                                       + fa_sum[2] * vc_sum[2]))
+            fas[:, :] = 0.0
+            drag_number = _drag_number(lam, rate, drag_number)  # lam stays 0 without air
+        _update(xs, vs, fs, rate, mass, model.gravity, dt)
         if model.hub >= 0:
             state.hub[1] += dt * torque / model.hub_inertia
             state.hub[0] += dt * state.hub[1]
+    state.x[:, :] = xs.T
+    state.v[:, :] = vs.T
     return peak, drag_number

@@ -56,7 +56,7 @@ def kernel_model(model: NetModel, env: Environment) -> DeployModel:
                        float(model.hub_radius), 0.5 * float(model.hub_length),
                        float(model.hub_inertia) if model.hub_node >= 0 else 1.0,
                        np.asarray(env.gravity, dtype=float), float(env.rho),
-                       np.asarray(env.wind, dtype=float), bool(env.air))
+                       np.asarray(env.wind, dtype=float), bool(env.air), model.kernel_blocks)
 
 
 def kernel_state(state: NetState, wrap: np.ndarray | None = None) -> DeployState:

@@ -15,6 +15,7 @@ import numpy as np
 
 from flexnet_fe.net.config import RotaryNet, TractionNet, WarpInitialState
 from flexnet_fe.net.forces import RopeMaterial, rope_material
+from flexnet_fe.net.kernels import spring_blocks
 
 
 @dataclass(frozen=True)
@@ -104,6 +105,12 @@ class NetModel:
     def kernel_springs(self) -> np.ndarray:
         """``springs`` as uint32 (m, 2), the deploy kernel's index type (computed once, read-only)."""
         return _frozen(self.springs.astype(np.uint32))
+
+    @cached_property
+    def kernel_blocks(self) -> np.ndarray:
+        """The segments in runs and per-segment blocks, (b, 6) int64, for the deploy kernel
+        (``net.kernels.spring_blocks``; computed once, read-only)."""
+        return _frozen(spring_blocks(self.springs, self.hub_link))
 
     @cached_property
     def links(self) -> np.ndarray:

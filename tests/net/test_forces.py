@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from flexnet_fe.net.forces import aero_coefficients, rope_tension, segment_aero_force, spring_force
-from flexnet_fe.net.kernels import DeployModel, DeployState, net_forces
+from flexnet_fe.net.kernels import DeployModel, DeployState, net_forces, spring_blocks
 
 K, C, L0 = 200.0, 3.0, 0.05
 
@@ -16,10 +16,11 @@ def production_forces(x, v, springs, rest, k, c, diameter, air=False, wind=(0.0,
     no hub: f (n, 3) [N], tension (m,) [N]."""
     n, m = len(x), len(springs)
     f, t = np.zeros((n, 3)), np.zeros(m)
-    model = DeployModel(np.asarray(springs, np.uint32), np.full(m, rest), np.full(m, k), np.full(m, c), np.zeros(m),
+    springs = np.asarray(springs, np.uint32)
+    model = DeployModel(springs, np.full(m, rest), np.full(m, k), np.full(m, c), np.zeros(m),
                         np.full(m, diameter), np.zeros(m, np.bool_), np.zeros(0, np.int64), np.zeros(m), np.ones(n),
                         -1, 0.1, 0.01, 1.0, np.zeros(3),
-                        float(rho), np.asarray(wind, float), air)
+                        float(rho), np.asarray(wind, float), air, spring_blocks(springs, np.zeros(m, np.bool_)))
     state = DeployState(np.asarray(x, float), np.asarray(v, float), np.zeros(2), np.zeros(m), t, np.zeros(2))
     net_forces(model, state, f, np.zeros(n))
     return f, t
