@@ -126,7 +126,8 @@ from numba import njit
 
 from flexnet_fe.collide.air import segment_air
 from flexnet_fe.collide.fpu import FTZ_DAZ, get_mxcsr, set_mxcsr
-from flexnet_fe.collide.model import (A_AIR_PAID, A_BROKEN, A_CROSS, A_DISS_CONTACT, A_DISS_FRICTION, A_DISS_ROPE,
+from flexnet_fe.collide.model import (A_AIR_PAID, A_BROKEN, A_CROSS, A_DAMP_CAPPED, A_DAMP_POINTS,
+                                      A_DISS_CONTACT, A_DISS_FRICTION, A_DISS_ROPE,
                                       A_FAST_SEG_STEPS, A_FCONTACT, A_IMP_B, A_NBROKEN, A_NCONTACT, A_PEN,
                                       A_PEN_INT, A_PEN_RATIO, A_PHELD, A_SKIPPED, A_TUN_PART, A_TUN_SPEED,
                                       A_TUN_STEP, A_U_CONTACT, A_WORK_GRAVITY, FAR, NONFINITE, OK,
@@ -557,7 +558,11 @@ def _apply(model, state, wk, slot, fin, pt, dt, law):
         inv_m += s * s / model.mass[j]
     cap = wstick * STICK_FRACTION / (inv_m * dt)  # [kg/s] the explicit step's discrete bound
     fel = kk * delta ** expo
-    fn = normal_force(delta, ddot, kk, expo, model.damp_c / vk, cap)
+    chi = model.damp_c / vk
+    fn = normal_force(delta, ddot, kk, expo, chi, cap)
+    state.acc[A_DAMP_POINTS] += 1.0
+    if fel * chi > cap:
+        state.acc[A_DAMP_CAPPED] += 1.0
     vt0, vt1, vt2 = vr0 - vn * nw0, vr1 - vn * nw1, vr2 - vn * nw2
     ft0, ft1, ft2 = friction_force(fn, model.mu, vt0, vt1, vt2, model.v_reg, cap)
     f0, f1, f2 = fn * nw0 + ft0, fn * nw1 + ft1, fn * nw2 + ft2

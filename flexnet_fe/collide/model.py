@@ -36,7 +36,9 @@ A_FAST_SEG_STEPS = 26  # Σ over the steps of the number of fast segments (kerne
 A_U_CONTACT = 27  # contact stored energy Σ U(δ) at the end of the last call [J] (kernel._stored_contact_energy)
 A_AIR_PAID = 28  # far net: time the last air impulses covered beyond the current window's start [s] (kernel._far_window)
 A_REFINE = 29  # energy taken out by cutting rope pieces during the run, −ΔE, whole run [J] (collide.adapt)
-N_ACC = 30
+A_DAMP_POINTS = 30  # contact point-steps with a force (each point of the line law counts), whole run
+A_DAMP_CAPPED = 31  # of those, the point-steps whose dashpot was capped at the explicit step (contact.law.normal_force)
+N_ACC = 32
 
 # -- status codes of ``kernel.advance`` ---------------------------------------------------------
 OK, TUNNEL, NONFINITE, FAR = 0, 1, 2, 3

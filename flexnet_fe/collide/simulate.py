@@ -985,8 +985,7 @@ def _summary(rec: _Recorder, setup: Setup, loads: FinLoads, x_start, dt, steps, 
         "line_stiffness_body": float(km.kl_body) if km.line_law else None,
         "line_stiffness_fin": [float(v) for v in km.kl_fin] if km.line_law else None,
         "line_spacing_m": float(km.line_h_body) if km.line_law else None,
-        # the restitution the damping law gives an impact above the approach-speed floor
-        "restitution_achieved": e_ach,
+        **_damping_summary(acc, e_ach),
         "free_nodes": int(km.free.sum()),
         "active_segments": int(km.seg.shape[0]),
         "crop_reach_m": setup.reach if math.isfinite(setup.reach) else None,
@@ -996,6 +995,16 @@ def _summary(rec: _Recorder, setup: Setup, loads: FinLoads, x_start, dt, steps, 
         **part_impulse_sums(st.part_imp, [f.name for f in missile.fins]),
     }
     return summary
+
+
+def _damping_summary(acc: np.ndarray, e_ach: float) -> dict:
+    """``restitution_achieved``: the restitution the damping law gives an impact above the
+    approach-speed floor; ``contact_damping_capped_share``: the share of contact point-steps
+    whose dashpot was capped at the explicit step (``contact.law.normal_force``, ``damp_cap``;
+    0 when nothing touched) — the damping there is less than Eq. (29)'s."""
+    points = acc[M.A_DAMP_POINTS]
+    return {"restitution_achieved": e_ach,
+            "contact_damping_capped_share": float(acc[M.A_DAMP_CAPPED] / points) if points > 0 else 0.0}
 
 
 def part_impulse_sums(part_imp: np.ndarray, fin_names: list[str]) -> dict:
