@@ -590,8 +590,8 @@ def omitted_before_stress(spec: FinSpec, shell: ShellConfig, accel_t: np.ndarray
     positive semi-definite quadratic form), so at every point and instant |σ_vm(full) −
     σ_vm(window)| ≤ σ_vm(σ_o), and the two peaks differ by at most the largest σ_vm(σ_o) over the
     fin and [0, ``end``]. σ_o, a smooth inertial field, is solved here on the fin's own mesh
-    (``spec.mesh_path``, no refinement at the loads; ~0.3–1.5 s on the paper fins), on this
-    process alone (identical on every rank), stresses every step."""
+    (``spec.mesh_path``, no refinement at the loads; 0.2–1.3 s per paper fin, after the loops), on
+    this process alone (identical on every rank), stresses every step."""
     from flexnet_fe.shell import api
 
     at, aa = np.asarray(accel_t, float), np.asarray(accel, float).reshape(-1, 3)
