@@ -19,7 +19,7 @@ superposition the peak moves by at most the left-out load's own peak stress, whi
 solves on the fin's unrefined mesh (``shell.stage.omitted_before_stress``, ×2 for that mesh;
 ``window_before_stress_bound_pa``): a warning when it exceeds ``shell.peak_error_tolerance`` of
 the peak. (The former criterion, the force ratio above that tolerance, fired on every fin of
-infrared × traction at ratios of 12–77 % while the bound is 0.7–1 % of the peaks and the full
+infrared × traction at ratios of 12–77 % while the bound is 0.3–0.8 % of the peaks and the full
 window moved wing_1 by 0.08 %.) After the window it could only matter by making a later,
 larger peak, which needs a load comparable with the fin's own contact loads: a warning above
 0.5. On radar × traction the windowed peaks equal the full-window ones to 7e-5 (largest ratios
