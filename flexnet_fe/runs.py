@@ -232,6 +232,20 @@ def _on_signal(signum, frame):
         del err  # (no reference from this frame: a swallowed Interrupted dies at once)
 
 
+def _quiet_unraisable(hook):
+    """``sys.unraisablehook`` that drops an :class:`Interrupted` Python swallowed where the signal
+    landed (a weakref callback or ``__del__``, REDELIVER_S) — it is delivered again, so its
+    "Exception ignored … Traceback" on stderr would only alarm the user (CI, 2026-11-28: SIGINT in
+    an import's module-lock callback during the deploy stage) — and passes anything else to
+    ``hook``."""
+    def quiet(unraisable):
+        from flexnet_fe.errors import Interrupted
+
+        if not isinstance(unraisable.exc_value, Interrupted):
+            hook(unraisable)
+    return quiet
+
+
 def _redeliver() -> None:
     while True:
         time.sleep(REDELIVER_S)
@@ -255,11 +269,14 @@ def signal_handlers():
     old = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
     for s in old:
         signal.signal(s, _on_signal)
+    old_hook = sys.unraisablehook
+    sys.unraisablehook = _quiet_unraisable(old_hook)
     _SIG.depth += 1
     try:
         yield
     finally:
         _SIG.depth -= 1
+        sys.unraisablehook = old_hook
         for s, h in old.items():
             signal.signal(s, h if h is not None else signal.SIG_DFL)
         if _SIG.depth == 0:  # an Interrupted leaving the block is not lost: the caller's except handles it
