@@ -18,6 +18,12 @@ allowable) the verdict is marked "within the error estimate" and a warning is ra
 overall verdict is PASS only when every fin passes beyond its error estimate: a pass within it is
 UNDECIDED (the peak plus its estimated error reaches the allowable; the resolution does not decide
 it), a fail within it stays FAIL (the conservative side).
+
+A fin whose contact load alternated from one sample to the next for longer than the collide stage's
+limit (collide summary ``fin_load_alternation_samples`` above ``fin_load_alternation_limit_samples``:
+an explicit contact step past its stability limit, ``collide.metrics.load_alternation_runs``) has
+no defined peak: its stresses are step noise, neither safe nor conservative. Such a fin decides
+nothing: the banner is FAIL only on the other fins' failures, and otherwise UNDECIDED, naming it.
 """
 
 from __future__ import annotations
@@ -58,6 +64,7 @@ class FinVerdict:
     margin      MS = allowable / von Mises − 1 [–]
     passed      MS ≥ 0 (None when no allowable or no stress)
     marginal    |MS| within the peak's relative error estimate
+    loads_alternate  the fin's load alternated past the collide stage's limit (no defined peak)
     """
 
     name: str
@@ -71,6 +78,7 @@ class FinVerdict:
     margin: float | None
     passed: bool | None
     marginal: bool
+    loads_alternate: bool = False
 
 
 @dataclass(frozen=True)
@@ -104,8 +112,10 @@ def _num(v) -> float | None:
     return float(v) if isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) else None
 
 
-def fin_verdict(name: str, res: dict, yield_pa: float | None, yield_what: str) -> FinVerdict:
-    """A fin's verdict from its shell-summary entry (``allowable_pa`` first, else yield)."""
+def fin_verdict(name: str, res: dict, yield_pa: float | None, yield_what: str,
+                alternating: frozenset[str] = frozenset()) -> FinVerdict:
+    """A fin's verdict from its shell-summary entry (``allowable_pa`` first, else yield);
+    ``alternating``: the fins whose loads alternated (:func:`alternating_fins`)."""
     vm, allow = _num(res.get("peak_von_mises_pa")), _num(res.get("allowable_pa"))
     if allow is not None:
         source = "shell summary allowable_pa"
@@ -120,7 +130,21 @@ def fin_verdict(name: str, res: dict, yield_pa: float | None, yield_what: str) -
         time_s=_num(res.get("peak_time_s")), location_m=res.get("peak_location_m"),
         error_rel=err, allowable_pa=allow, allowable_source=source, margin=ms,
         passed=None if ms is None else ms >= 0.0,
-        marginal=ms is not None and err is not None and math.isfinite(ms) and abs(ms) <= err)
+        marginal=ms is not None and err is not None and math.isfinite(ms) and abs(ms) <= err,
+        loads_alternate=name in alternating)
+
+
+def alternating_fins(run: RunData) -> frozenset[str]:
+    """Fins whose contact load alternated from one sample to the next for more samples than the
+    collide stage's limit (collide summary ``fin_load_alternation_samples``,
+    ``fin_load_alternation_limit_samples``); empty when the collide section lacks either."""
+    stage = next((s for s in run.stages if s.name == "collide"), None)
+    section = stage.section if stage is not None and stage.complete else None
+    runs = (section or {}).get("fin_load_alternation_samples")
+    limit = _num((section or {}).get("fin_load_alternation_limit_samples"))
+    if not isinstance(runs, dict) or limit is None:
+        return frozenset()
+    return frozenset(n for n, r in runs.items() if _num(r) is not None and r > limit)
 
 
 def _unprefixed(text: str, stage: str) -> str:
@@ -286,17 +310,23 @@ def build_verdict(run: RunData) -> Verdict:
     """The verdict of a run directory (see the module doc)."""
     yield_pa, yield_what = yield_strength(run.case)
     shell = next((s for s in run.stages if s.name == "shell"), None)
-    fins = tuple(fin_verdict(n, r, yield_pa, yield_what)
+    alternating = alternating_fins(run)
+    fins = tuple(fin_verdict(n, r, yield_pa, yield_what, alternating)
                  for n, r in (fin_results(shell.section).items() if shell and shell.complete else []))
     warnings = collect_warnings(run, fins)
-    failed = [f.name for f in fins if f.passed is False]
+    failed = [f.name for f in fins if f.passed is False and not f.loads_alternate]
     undecided = [f.name for f in fins if f.passed is None]
+    noisy = [f.name for f in fins if f.loads_alternate]
     if failed:
         overall, reason = "FAIL", "margin of safety < 0 on " + ", ".join(failed)
     elif shell is None or not shell.complete:
         overall, reason = "INCOMPLETE", f"no fin stresses (shell stage {shell.state if shell else 'absent'})"
     elif undecided or not fins:
         overall, reason = "INCOMPLETE", ("no allowable for " + ", ".join(undecided)) if undecided else "no fin loaded"
+    elif noisy:
+        overall, reason = "UNDECIDED", ("the contact loads on " + ", ".join(noisy) + " alternate from one sample to "
+                                        "the next (an explicit contact step past its stability limit): their peaks "
+                                        "are not defined (see the collide warnings)")
     elif any(f.marginal for f in fins):
         close = ", ".join(f.name for f in fins if f.marginal)
         overall, reason = "UNDECIDED", (f"margin of safety ≥ 0 on every solved fin, but within the peak's error "
@@ -305,6 +335,8 @@ def build_verdict(run: RunData) -> Verdict:
         overall, reason = "PASS", "margin of safety ≥ 0 on every solved fin"
     if overall == "FAIL" and any(f.marginal for f in fins):
         reason += " (some margins lie within the error estimate: see the warnings)"
+    if overall == "FAIL" and noisy:
+        reason += f" (the peaks of {', '.join(noisy)} are not defined: their loads alternate)"
     interval = _num(shell.section.get("load_sample_interval_s")) if shell and shell.complete else None
     if overall != "INCOMPLETE" and interval is not None:
         # shell.stage.load_sampling_warning: coarse, the peaks are under-estimated; fine, they

@@ -545,16 +545,19 @@ def _fin_mesh_path(shell: ShellConfig, spec: FinSpec, contacts: FinContacts, idx
     return path
 
 
+def fin_material(spec: FinSpec, shell: ShellConfig) -> ShellMaterial:
+    """The shell material of a fin: its section and material from the missile, κ from ``[shell]``."""
+    return ShellMaterial(thickness=spec.thickness, youngs_modulus=spec.youngs_modulus,
+                         poisson_ratio=spec.poisson_ratio, density=spec.density,
+                         yield_strength=spec.yield_strength, shear_correction=shell.shear_correction)
+
+
 def _setup_fin(shell: ShellConfig, spec: FinSpec, contacts: FinContacts, acc_t, acc,
                stage_dir: Path, end_time: float, log, comm) -> FinJob:
     """Mesh, model, loads, St-Venant zones, window and output of one fin (serial, dolfinx)."""
     idx = contacts.fin_names.index(spec.name) if spec.name in contacts.fin_names else -1
     fin_mesh = load_fin_mesh(_fin_mesh_path(shell, spec, contacts, idx, stage_dir, comm), comm)
-    mat = ShellMaterial(thickness=spec.thickness, youngs_modulus=spec.youngs_modulus,
-                        poisson_ratio=spec.poisson_ratio, density=spec.density,
-                        yield_strength=spec.yield_strength,
-                        shear_correction=shell.shear_correction)
-    model = build_model(fin_mesh, mat, shell.rotary_inertia_scale, supports=dict(shell.supports),
+    model = build_model(fin_mesh, fin_material(spec, shell), shell.rotary_inertia_scale, supports=dict(shell.supports),
                         mass_scaling=shell.mass_scaling)
     if shell.load is not None:
         loads = pressure_history(model, shell.load.times, shell.load.pressure)
@@ -601,10 +604,7 @@ def omitted_before_stress(spec: FinSpec, shell: ShellConfig, accel_t: np.ndarray
     a0 = np.array([np.interp(start, at, aa[:, c]) for c in range(3)])
     times = np.concatenate([at[:k], [start, start * (1 + 1e-9)]])
     values = np.vstack([aa[:k], a0, np.zeros(3)])  # a(t) until the start, then nothing
-    mat = ShellMaterial(thickness=spec.thickness, youngs_modulus=spec.youngs_modulus,
-                        poisson_ratio=spec.poisson_ratio, density=spec.density,
-                        yield_strength=spec.yield_strength, shear_correction=shell.shear_correction)
-    model = build_model(load_fin_mesh(spec.mesh_path, MPI.COMM_SELF), mat,
+    model = build_model(load_fin_mesh(spec.mesh_path, MPI.COMM_SELF), fin_material(spec, shell),
                         shell.rotary_inertia_scale, supports=dict(shell.supports))
     loads = LoadHistory(times=np.array([0.0, end]), nodal=sparse.csc_matrix((model.op.n_owned, 2)),
                         accel_times=times, accel=values, mass_c=translational_mass(model.op))

@@ -244,3 +244,38 @@ def test_a_pass_within_the_error_estimate_is_undecided(tmp_path):
         v = build_verdict(read_run(run))
         assert v.overall == overall, (close, err, fail)
         assert ("rudder_2" in v.overall_reason) is (overall == "UNDECIDED")
+
+
+def test_a_fin_whose_loads_alternate_decides_nothing(tmp_path):
+    """Reference: collide.metrics.load_alternation_runs' meaning — a load alternating from one sample
+    to the next for more than the limit is an explicit step past its stability limit, so the fin's
+    peak is step noise (docs/validation.md, "Contact damping at the explicit limit"). Such a fin can
+    neither pass nor fail the verdict: with every other fin safe the banner is UNDECIDED and names it
+    (not PASS, even though its own MS ≥ 0; not FAIL, even when its noise peak exceeds the allowable);
+    another fin's real failure keeps FAIL. At or below the limit, or without the limit in the summary
+    (older runs), nothing changes."""
+    from flexnet_fe.io import atomic_write_json
+    from flexnet_fe.report.rundir import read_run
+    from flexnet_fe.report.verdict import build_verdict
+
+    run = tmp_path / "run"
+    atomic_write_json(run / "resolved.json", {"case": {"case": {"name": "n", "stages": ["collide", "shell"]}}})
+    atomic_write_json(run / "status.json", {"case": "n", "stages": {"collide": {"state": "done"},
+                                                                   "shell": {"state": "done"}}})
+    safe = {"peak_von_mises_pa": 1e8, "allowable_pa": 5e8, "peak_error_estimate_rel": 0.01}
+    over = {"peak_von_mises_pa": 9e8, "allowable_pa": 5e8, "peak_error_estimate_rel": 0.01}
+    cases = (  # (rudder_1's alternation run, limit key present, rudder_1, wing_1) -> banner
+        (2091, True, safe, safe, "UNDECIDED"), (2091, True, over, safe, "UNDECIDED"),
+        (2091, True, safe, over, "FAIL"), (8, True, safe, safe, "PASS"), (8, True, over, safe, "FAIL"),
+        (2091, False, safe, safe, "PASS"))
+    for runs, keyed, rudder, wing, banner in cases:
+        collide = {"fin_load_alternation_samples": {"rudder_1": runs, "wing_1": 1}}
+        if keyed:
+            collide["fin_load_alternation_limit_samples"] = 8
+        atomic_write_json(run / "summary.json", {"collide": collide,
+                                                 "shell": {"rudder_1": rudder, "wing_1": wing}})
+        v = build_verdict(read_run(run))
+        assert v.overall == banner, (runs, keyed, banner)
+        flagged = runs > 8 and keyed
+        assert [f.name for f in v.fins if f.loads_alternate] == (["rudder_1"] if flagged else [])
+        assert ("rudder_1" in v.overall_reason) is (flagged or (banner == "FAIL" and rudder is over))
