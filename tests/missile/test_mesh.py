@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from flexnet_fe.machine import launcher_env
 from flexnet_fe.missile.config import MissileConfig
 from flexnet_fe.missile.geometry import EDGE_NAMES
 from flexnet_fe.missile.build import build_missile
@@ -181,7 +182,7 @@ def _run_loader(tmp_path, paths, nproc):
     cmd = [sys.executable, str(script), *map(str, paths)]
     if nproc > 1:
         cmd = ["mpirun", "--oversubscribe", "--allow-run-as-root", "-n", str(nproc)] + cmd
-    env = {**os.environ, "OMPI_MCA_rmaps_base_oversubscribe": "1"}
+    env = {**launcher_env(dict(os.environ)), "OMPI_MCA_rmaps_base_oversubscribe": "1"}
     out = subprocess.run(cmd, capture_output=True, text=True, env=env, cwd=tmp_path,
                          timeout=300)
     assert out.returncode == 0, out.stderr[-3000:]

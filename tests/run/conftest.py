@@ -12,6 +12,8 @@ from pathlib import Path
 
 import pytest
 
+from flexnet_fe.machine import launcher_env
+
 ROOT = Path(__file__).resolve().parents[2]
 PY = sys.executable
 CLI = [PY, "-m", "flexnet_fe.cli"]
@@ -21,7 +23,7 @@ TINY_DEPLOY = ["--set", "net.edge_length=1.0", "--set", "net.mesh_size=0.1"]
 
 
 def env() -> dict:
-    return dict(os.environ, FLEXNET_NO_PROGRESS="1", PYTHONPATH=str(ROOT))
+    return dict(launcher_env(dict(os.environ)), FLEXNET_NO_PROGRESS="1", PYTHONPATH=str(ROOT))
 
 
 def run_cli(*args, timeout=600, extra_env=None):

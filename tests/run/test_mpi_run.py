@@ -8,8 +8,10 @@ so the stress histories agree to round-off: |Δ| ≤ 1e-10 × the column's large
 from __future__ import annotations
 
 import json
+import os
 import shutil
 import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -75,3 +77,37 @@ def test_mpirun_two_ranks_equals_serial(tmp_path):
     # other ranks never touched the folder: no stray partial folders, one lock, released
     assert sorted(x.name for x in par.iterdir() if x.name.startswith(".")) == []
     assert (par / "run.lock").read_text() == ""
+
+
+def test_a_singletons_child_is_not_an_mpirun_rank(monkeypatch):
+    # Reference: Open MPI's environment, as measured on this machine (2026-11-28): a plain process
+    # that initialises MPI (importing dolfinx) becomes a singleton and setenv()s OMPI_MCA_ess=singleton,
+    # PMIX_RANK=0 and ~25 more OMPI_*/ORTE_*/PMIX_* variables; a process it starts inherits them
+    # (pytest-xdist's workers under `pytest -n 2 tests/shell`: its conftest imports dolfinx in the
+    # main process). Such a child is no rank of an mpirun job (it must still run the collision's
+    # check beside it), and an mpirun started with that environment exits 1 without a word.
+    from flexnet_fe import machine
+
+    singleton = {"OMPI_MCA_ess": "singleton", "PMIX_RANK": "0", "OMPI_MCA_orte_launch": "1",
+                 "ORTE_SCHIZO_DETECTION": "ORTE", "PMIX_NAMESPACE": "x", "OMPI_MCA_btl": "self", "PATH": "/bin"}
+    for k in machine.MPI_LAUNCH_VARS + tuple(singleton):
+        monkeypatch.delenv(k, raising=False)
+    assert not machine.launched_by_mpirun()
+    for k, v in singleton.items():
+        monkeypatch.setenv(k, v)
+    assert not machine.launched_by_mpirun()
+    monkeypatch.setenv("OMPI_COMM_WORLD_SIZE", "2")  # a real rank has this too
+    assert machine.launched_by_mpirun()
+    monkeypatch.delenv("OMPI_COMM_WORLD_SIZE")
+    monkeypatch.delenv("OMPI_MCA_ess")  # PMIX_RANK without a singleton: a PMIx launcher's rank
+    assert machine.launched_by_mpirun()
+    assert machine.launcher_env(singleton) == {"PATH": "/bin"}
+    assert machine.launcher_env({"OMPI_MCA_btl": "self", "PATH": "/bin"}) == {"OMPI_MCA_btl": "self", "PATH": "/bin"}
+    # and mpirun, started from this (now singleton-like) environment through launcher_env, runs
+    if shutil.which("mpirun") is None:
+        pytest.skip("no mpirun")
+    monkeypatch.setenv("OMPI_MCA_ess", "singleton")
+    cmd = ["mpirun", "--oversubscribe", "--allow-run-as-root", "-n", "2", sys.executable, "-c",
+           "from mpi4py import MPI; print(MPI.COMM_WORLD.size)"]
+    p = subprocess.run(cmd, capture_output=True, text=True, timeout=120, env=machine.launcher_env(dict(os.environ)))
+    assert p.returncode == 0 and p.stdout.split() == ["2", "2"], p.stderr[-2000:]

@@ -17,6 +17,7 @@ from flexnet_fe.errors import CaseError, NumericalError
 from flexnet_fe.io import read_history_csv, write_history_csv
 from flexnet_fe.shell import stage as stage_mod
 from flexnet_fe.shell.config import FinSpec, ShellConfig
+from flexnet_fe.machine import launcher_env
 from flexnet_fe.shell.meshio import write_plate_msh
 from flexnet_fe.shell.stage import run_shell
 from flexnet_fe.shell.stage import CELL_NAMES, NODAL_NAMES
@@ -82,6 +83,11 @@ def test_stage_outputs(tmp_path):
     # test_shell_load_option_runs_a_pressure_history_on_a_fin)
     assert w["peak_max_principal_pa"] > 0
     assert w["allowable_pa"] == 503e6 and 0 < w["peak_error_estimate_rel"] < 1
+    # the free vibration after the last load (the half-sine ends at 1 ms): the largest history row
+    # after it, at most the peak (which is the largest row of all)
+    after = h["t_s"] > 1e-3
+    assert w["after_last_load_max_von_mises_pa"] == h["max_von_mises_pa"][after].max()
+    assert 0 < w["after_last_load_over_peak"] == w["after_last_load_max_von_mises_pa"] / w["peak_von_mises_pa"] <= 1
     assert isinstance(s["warnings"], list)
     os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
     os.environ.setdefault("PYVISTA_OFF_SCREEN", "true")
@@ -159,7 +165,7 @@ def test_two_processes_give_the_same_history(tmp_path):
     """))
     res = subprocess.run(["mpirun", "--oversubscribe", "--allow-run-as-root", "-n", "2", str(PY),
                           str(script)], capture_output=True, text=True, timeout=600,
-                         env={**os.environ, "FLEXNET_NO_PROGRESS": "1"})
+                         env={**launcher_env(dict(os.environ)), "FLEXNET_NO_PROGRESS": "1"})
     assert res.returncode == 0, res.stderr[-3000:]
     a = read_history_csv(tmp_path / "serial" / "wing" / "history.csv")
     b = read_history_csv(tmp_path / "parallel" / "wing" / "history.csv")
