@@ -37,7 +37,7 @@ from flexnet_fe.machine import cpu_count
 from flexnet_fe.shell.model import ShellModel, build_model
 from flexnet_fe.shell import hotspot
 from flexnet_fe.shell.recovery import build_recovery, locate_peak, stress_tensors, von_mises
-from flexnet_fe.shell.schedule import (AFTER_RATIO_LIMIT, IO_LOCK, FinWindow,
+from flexnet_fe.shell.schedule import (FREE_VIBRATION_LIMIT, IO_LOCK, FinWindow,
                                       fin_window, run_as_ready, window_steps)
 from flexnet_fe.shell.solve import ParallelSampler, RunResult, recovery_for, run
 from flexnet_fe.runs import ENVELOPE_XDMF, FIELDS_XDMF, HISTORY
@@ -484,7 +484,21 @@ def finish_fin(job: FinJob, res: RunResult, shell: ShellConfig) -> dict:
             "dofs": ts.dofs, "steps": ts.n_steps,
             "start_time_s": ts.start_step * ts.dt,
             "end_time_s": (ts.start_step + ts.n_steps) * ts.dt,
-            "sample_interval_s": ts.every * ts.dt, "peak_interval_s": ts.peak_every * ts.dt}
+            "sample_interval_s": ts.every * ts.dt, "peak_interval_s": ts.peak_every * ts.dt,
+            **after_last_load(res.t, vm, job.window.last_load_s, peak)}
+
+
+def after_last_load(t: np.ndarray, vm: np.ndarray, last_load_s: float, peak: float) -> dict:
+    """The fin's free vibration after its last contact load, from the history rows (t (ns,) [s],
+    vm (ns,) [Pa]): ``after_last_load_max_von_mises_pa`` (the largest von Mises of a row after
+    ``last_load_s`` [s]) and ``after_last_load_over_peak`` (that over the peak [Pa]); None for both
+    when the window has no last load (shell.window = 'full', a given pressure) or no row after it."""
+    after = np.asarray(t) > last_load_s  # (False everywhere for nan)
+    if not after.any():
+        return {"after_last_load_max_von_mises_pa": None, "after_last_load_over_peak": None}
+    top = float(np.asarray(vm)[after].max())
+    return {"after_last_load_max_von_mises_pa": top,
+            "after_last_load_over_peak": top / peak if peak > 0 else None}
 
 
 def solve_fin(model: ShellModel, loads: LoadHistory, shell: ShellConfig, window: FinWindow,
@@ -574,41 +588,48 @@ def _setup_fin(shell: ShellConfig, spec: FinSpec, contacts: FinContacts, acc_t, 
 
 
 WINDOW_BOUND_FACTOR = 2.0
-"""[-] Safety factor on :func:`omitted_before_stress`, which is solved on the fin's own unrefined
+"""[-] Safety factor on :func:`omitted_stress`, which is solved on the fin's own unrefined
 mesh: its peak sits at a corner of the clamped root, where it grows ×1.18–1.19 per halving of the
 mesh (infrared × traction's wing_1 and rudder_1, 20 → 10 → 5 mm: 0.289 → 0.345 → 0.406 and
 0.293 → 0.352 → 0.405 MPa; docs/validation.md, "The time window's bound"); 2 covers four
 halvings (1.19⁴ = 2.0), down to the 1.25 mm of the cases' local meshes."""
 
 
-def omitted_before_stress(spec: FinSpec, shell: ShellConfig, accel_t: np.ndarray,
-                          accel: np.ndarray, start: float, end: float) -> float:
-    """How far the body acceleration a fin's window leaves out before its start can move the
-    fin's peak von Mises [Pa] (before :data:`WINDOW_BOUND_FACTOR`); 0 when there is none.
+def omitted_stress(spec: FinSpec, shell: ShellConfig, accel_t: np.ndarray, accel: np.ndarray,
+                   t_from: float, t_to: float, end: float) -> float:
+    """How far the body acceleration a fin's window leaves out over [t_from, t_to) [s] can move
+    the fin's stresses up to ``end`` [s]: the peak von Mises [Pa] of the fin's response to −m a(t)
+    on that interval only (zero elsewhere; ``accel_t`` (na,) [s], ``accel`` (na, 3) [m/s²], linear
+    between samples), from rest at t_from, over [t_from, end] (before :data:`WINDOW_BOUND_FACTOR`);
+    0 when there is none.
 
-    Superposition (the shell is linear and starts at rest): a run from t = 0 is the window's run
-    (from rest at ``start`` [s], every load from then on) plus the fin's response σ_o to the load
-    it leaves out, −m a(t) for t < start (``accel_t`` (na,) [s], ``accel`` (na, 3) [m/s²], linear
-    between samples), from rest at t = 0. Von Mises is a seminorm of the stress (the root of a
-    positive semi-definite quadratic form), so at every point and instant |σ_vm(full) −
-    σ_vm(window)| ≤ σ_vm(σ_o), and the two peaks differ by at most the largest σ_vm(σ_o) over the
-    fin and [0, ``end``]. σ_o, a smooth inertial field, is solved here on the fin's own mesh
-    (``spec.mesh_path``, no refinement at the loads; 0.2–1.3 s per paper fin, after the loops), on
-    this process alone (identical on every rank), stresses every step."""
+    Superposition (the shell is linear, time-invariant and starts at rest): before the window
+    (t_from = 0, t_to = its start, end = its end) a run from t = 0 is the window's run (from rest
+    at its start, every load from then on) plus this response; after it (t_from = the window's end,
+    t_to = end = the stage's end) a run on to the stage's end is the window's run continued
+    without loads (its free vibration: ``after_last_load_over_peak``) plus this response. Von
+    Mises is a seminorm of the stress (the root of a positive semi-definite quadratic form), so
+    at every point and instant |σ_vm(full) − σ_vm(window)| ≤ σ_vm(response), and the peaks differ
+    by at most its largest value. The response, a smooth inertial field, is solved here on the
+    fin's own mesh (``spec.mesh_path``, no refinement at the loads; 0.2–1.3 s per paper fin and
+    side, after the loops), on this process alone (identical on every rank), stresses every step."""
     from flexnet_fe.shell import api
 
     at, aa = np.asarray(accel_t, float), np.asarray(accel, float).reshape(-1, 3)
-    k = int(np.searchsorted(at, start, side="left"))  # samples strictly before the start
-    if k == 0 or not np.any(aa[:k]):
+    if at.size == 0 or t_to <= t_from or end <= t_from:
         return 0.0
-    a0 = np.array([np.interp(start, at, aa[:, c]) for c in range(3)])
-    times = np.concatenate([at[:k], [start, start * (1 + 1e-9)]])
-    values = np.vstack([aa[:k], a0, np.zeros(3)])  # a(t) until the start, then nothing
+    inside = (at > t_from) & (at < t_to)
+    ends = np.array([[np.interp(t, at, aa[:, c]) for c in range(3)] for t in (t_from, t_to)])
+    times = np.concatenate([[t_from], at[inside], [t_to, t_to * (1 + 1e-9) + 1e-12]]) - t_from
+    values = np.vstack([ends[:1], aa[inside], ends[1:], np.zeros(3)])  # a(t) on the interval only
+    if not np.any(values):
+        return 0.0
     model = build_model(load_fin_mesh(spec.mesh_path, MPI.COMM_SELF), fin_material(spec, shell),
                         shell.rotary_inertia_scale, supports=dict(shell.supports))
-    loads = LoadHistory(times=np.array([0.0, end]), nodal=sparse.csc_matrix((model.op.n_owned, 2)),
+    span = end - t_from
+    loads = LoadHistory(times=np.array([0.0, span]), nodal=sparse.csc_matrix((model.op.n_owned, 2)),
                         accel_times=times, accel=values, mass_c=translational_mass(model.op))
-    return float(api.solve(model, loads, end_time=end).run.peak_vm)
+    return float(api.solve(model, loads, end_time=span).run.peak_vm)
 
 
 def _fin_summary(job: FinJob, res: dict, shell: ShellConfig, spec: FinSpec,
@@ -623,10 +644,13 @@ def _fin_summary(job: FinJob, res: dict, shell: ShellConfig, spec: FinSpec,
     win = job.window
     before, after = ((fin_mass * a / fmax if fmax > 0 else 0.0)
                      for a in (win.accel_before_mps2, win.accel_after_mps2))
-    bound = 0.0
-    if win.accel_before_mps2 > 0.0:
-        bound = WINDOW_BOUND_FACTOR * omitted_before_stress(
-            spec, shell, job.loads.accel_times, job.loads.accel, res["start_time_s"], res["end_time_s"])
+    t0, t1 = res["start_time_s"], res["end_time_s"]
+    stage_end = win.stage_end_s if math.isfinite(win.stage_end_s) else t1
+    bound = WINDOW_BOUND_FACTOR * (omitted_stress(spec, shell, job.loads.accel_times, job.loads.accel, 0.0, t0, t1)
+                                   if win.accel_before_mps2 > 0.0 else 0.0)
+    bound_after = WINDOW_BOUND_FACTOR * (omitted_stress(spec, shell, job.loads.accel_times, job.loads.accel,
+                                                        t1, stage_end, stage_end)
+                                         if win.accel_after_mps2 > 0.0 else 0.0)
     peak = res["peak_von_mises_pa"]
     res.update(local_mesh_size_m=shell.local_mesh_size, h_min_m=model.h_min,
                peak_bearing_pa=b.peak_pa, peak_bearing_time_s=b.time_s,
@@ -637,7 +661,9 @@ def _fin_summary(job: FinJob, res: dict, shell: ShellConfig, spec: FinSpec,
                window_accel_after_mps2=win.accel_after_mps2,
                window_force_ratio_before=before, window_force_ratio_after=after,
                window_before_stress_bound_pa=bound,
-               window_before_stress_bound_rel=bound / peak if peak > 0 else 0.0)
+               window_before_stress_bound_rel=bound / peak if peak > 0 else 0.0,
+               window_after_stress_bound_pa=bound_after,
+               window_after_stress_bound_rel=bound_after / peak if peak > 0 else 0.0)
     if b.peak_pa > allow_b:
         warnings.append(
             f"shell {spec.name}: local bearing/contact stress {b.peak_pa / 1e6:.4g} MPa "
@@ -665,12 +691,20 @@ def _fin_summary(job: FinJob, res: dict, shell: ShellConfig, spec: FinSpec,
             f"{bound / 1e6:.4g} MPa ({100 * bound / peak if peak > 0 else math.inf:.3g} % of it, > "
             f"{100 * shell.peak_error_tolerance:.3g} %, shell.peak_error_tolerance; by "
             f"superposition, ×{WINDOW_BOUND_FACTOR:g}): set shell.window = 'full'")
-    if after > AFTER_RATIO_LIMIT:
+    free = res.get("after_last_load_over_peak")
+    if free is not None and free > FREE_VIBRATION_LIMIT:
         warnings.append(
-            f"shell {spec.name}: the time window ({span}) leaves out a body acceleration of "
-            f"up to {win.accel_after_mps2:.4g} m/s² after it (fin mass × it = {100 * after:.3g} % of "
-            f"the fin's largest contact force, > {100 * AFTER_RATIO_LIMIT:.3g} %): a later, larger "
-            f"peak is not ruled out; set shell.window = 'full'")
+            f"shell {spec.name}: after its last load the fin vibrates freely (undamped) at up to "
+            f"{100 * free:.3g} % of its peak within shell.end_margin (> {100 * FREE_VIBRATION_LIMIT:.3g} "
+            f"%): a later, larger peak of that vibration is not ruled out; raise shell.end_margin "
+            f"(docs/validation.md, \"After the last load\")")
+    if bound_after > shell.peak_error_tolerance * peak:
+        warnings.append(
+            f"shell {spec.name}: the time window ({span}) leaves out a body acceleration of up to "
+            f"{win.accel_after_mps2:.4g} m/s² after it, which can raise the stresses after it by up to "
+            f"{bound_after / 1e6:.4g} MPa ({100 * bound_after / peak if peak > 0 else math.inf:.3g} % of the "
+            f"peak, > {100 * shell.peak_error_tolerance:.3g} %, shell.peak_error_tolerance; by "
+            f"superposition, ×{WINDOW_BOUND_FACTOR:g}): set shell.window = 'full'")
     return res
 
 
