@@ -57,6 +57,8 @@ def child(out: str) -> None:
             t0 = clock()
             r = f(*a, **k)
             key = "numba_first_dispatch" if name == "evaluate_tensions" and name not in first else part
+            if name == "step_many" and name not in first:
+                row["kernel_first_call"] = clock() - t0  # also in kernel
             first.add(name)
             row[key] = row.get(key, 0.0) + clock() - t0
             return r
@@ -82,7 +84,7 @@ def measure(tree: str) -> dict:
 
 
 def report(tree: str, rows: list[dict]) -> None:
-    keys = ["import_numba", "import_stage", "numba_first_dispatch", "kernel", "tensions", "area", "record_other",
+    keys = ["import_numba", "import_stage", "numba_first_dispatch", "kernel", "kernel_first_call", "tensions", "area", "record_other",
             "snapshots", "files", "plot", "rest", "run_deploy", "wall"]
     print(f"\n{tree}: {len(rows)} runs, median [min, max] s (thread CPU; wall: run_deploy's wall)")
     for k in keys:
