@@ -13,7 +13,8 @@ t = 0: numba's run-time initialisation and the cache of ``net_forces``), the are
 record work (tensions, energies, loop area), the snapshots, the other files, the figure (importing
 matplotlib, drawing, writing the PNG). The trees alternate (ABAB…), so both see the same machine
 load; reported per tree: the median [min, max] of each part [s] and the kernel's share of the
-stage (run_deploy) and of the stage plus its imports. Thread CPU time, except ``wall``.
+stage (run_deploy) and of the stage plus its imports; for two trees the paired ratios (new / old) of
+the stage, of the stage without its figure (matplotlib's time varies most) and of the area. Thread CPU time, except ``wall``.
 """
 
 from __future__ import annotations
@@ -102,6 +103,7 @@ def main() -> None:
     p.add_argument("--child", help=argparse.SUPPRESS)
     p.add_argument("--trees", nargs="+", default=["."])
     p.add_argument("--repeats", type=int, default=7)
+    p.add_argument("--rows", help="also write every measurement to this JSON-lines file")
     a = p.parse_args()
     if a.child:
         return child(a.child)
@@ -116,9 +118,17 @@ def main() -> None:
     for tree in a.trees:
         report(tree, rows[tree])
     if len(a.trees) == 2:
-        ratio = [n["run_deploy"] / o["run_deploy"] for o, n in zip(*rows.values())]
-        print(f"\nrun_deploy CPU {a.trees[1]} / {a.trees[0]}, paired: {statistics.median(ratio):.3f} "
-              f"[{min(ratio):.3f}, {max(ratio):.3f}]; load average now {os.getloadavg()[0]:.2f}")
+        for label, f in (("run_deploy", lambda r: r["run_deploy"]),
+                         ("run_deploy without the figure", lambda r: r["run_deploy"] - r["plot"]),
+                         ("area", lambda r: r["area"])):
+            ratio = [f(n) / f(o) for o, n in zip(*rows.values())]
+            print(f"{label} CPU, {a.trees[1]} / {a.trees[0]}, paired: {statistics.median(ratio):.3f} "
+                  f"[{min(ratio):.3f}, {max(ratio):.3f}]")
+        print(f"load average now {os.getloadavg()[0]:.2f}")
+    if a.rows:
+        with open(a.rows, "w") as fh:
+            for tree, rs in rows.items():
+                fh.writelines(json.dumps({"tree": tree, **r}) + "\n" for r in rs)
 
 
 if __name__ == "__main__":

@@ -71,7 +71,7 @@ def raster_area(xy, cells, pixel):
     the short edge a–b (below b) or b–c (above b); the pixel centres on that segment are
     marked on a bit grid, one bit per pixel (overlaps count once), then the set bits are
     counted. Cost per triangle ∝ its rows, not its box area. (A bit grid, where a byte grid
-    marked pixel by pixel: a row's segment here spans ~3 pixels, one or two word ORs; 0.7× the
+    marked pixel by pixel: a row's segment here spans ~3 pixels, one or two word ORs; 0.6–0.7× the
     byte grid's time on the default case's 81 areas, the same counts: tests/net/test_area.py.)"""
     xmin = xy[:, 0].min(); xmax = xy[:, 0].max()
     ymin = xy[:, 1].min(); ymax = xy[:, 1].max()
