@@ -7,8 +7,8 @@ the central triangles of the rotary net). This is the area the net itself covers
 folds count once, holes where the net is torn open (none here) would not count.
 
 Computed by rasterising the projected cells on a square pixel grid of side ``pixel`` and
-counting covered pixel centres (scanline: one x-interval per triangle and pixel row). The
-error is bounded by the pixels cut by the outline:
+counting covered pixel centres (scanline: one x-interval per triangle and pixel row, marked on
+a bit grid). The error is bounded by the pixels cut by the outline:
 |error| <= perimeter × pixel / 2 (~0.1 % for a 10 m net at 1 cm); measured in the tests
 against the exact flat-net area.
 
@@ -24,6 +24,42 @@ import numpy as np
 from numba import njit
 
 
+ALL_BITS = np.uint64(0xFFFFFFFFFFFFFFFF)
+
+
+@njit(cache=True, inline="always")
+def _mark(row, i0, i1):
+    """Sets bits i0 … i1 (inclusive, 0 <= i0 <= i1) of ``row``, a pixel row stored as uint64 words
+    (pixel i: bit i % 64 of word i // 64)."""
+    w0 = i0 >> 6
+    w1 = i1 >> 6
+    lo = ALL_BITS << np.uint64(i0 & 63)
+    hi = ALL_BITS >> np.uint64(63 - (i1 & 63))
+    if w0 == w1:
+        row[w0] |= lo & hi
+    else:
+        row[w0] |= lo
+        for w in range(w0 + 1, w1):
+            row[w] = ALL_BITS
+        row[w1] |= hi
+
+
+@njit(cache=True)
+def _count_bits(words):
+    """Number of set bits in ``words`` (uint64 array, any shape, contiguous): SWAR popcount."""
+    m1 = np.uint64(0x5555555555555555)
+    m2 = np.uint64(0x3333333333333333)
+    m4 = np.uint64(0x0F0F0F0F0F0F0F0F)
+    h01 = np.uint64(0x0101010101010101)
+    total = 0
+    for w in words.reshape(-1):
+        w = w - ((w >> np.uint64(1)) & m1)
+        w = (w & m2) + ((w >> np.uint64(2)) & m2)
+        w = (w + (w >> np.uint64(4))) & m4
+        total += np.int64((w * h01) >> np.uint64(56))
+    return total
+
+
 @njit(cache=True)
 def raster_area(xy, cells, pixel):
     """Area [m^2] of the union of triangles: the pixel centres (square grid of side ``pixel``
@@ -33,13 +69,15 @@ def raster_area(xy, cells, pixel):
     Scanline form: a triangle with vertices sorted by y (a lowest, c highest) is cut by the
     centre line of each pixel row it spans along the segment between its long edge a–c and
     the short edge a–b (below b) or b–c (above b); the pixel centres on that segment are
-    marked on a byte grid (overlaps count once), then the grid is counted. Cost per triangle
-    ∝ its rows, not its box area."""
+    marked on a bit grid, one bit per pixel (overlaps count once), then the set bits are
+    counted. Cost per triangle ∝ its rows, not its box area. (A bit grid, where a byte grid
+    marked pixel by pixel: a row's segment here spans ~3 pixels, one or two word ORs; 0.6–0.7× the
+    byte grid's time on the default case's 81 areas, the same counts: tests/net/test_area.py.)"""
     xmin = xy[:, 0].min(); xmax = xy[:, 0].max()
     ymin = xy[:, 1].min(); ymax = xy[:, 1].max()
     nx = int(math.ceil((xmax - xmin) / pixel)) + 1
     ny = int(math.ceil((ymax - ymin) / pixel)) + 1
-    grid = np.zeros((ny, nx), dtype=np.uint8)  # 1: centre covered
+    grid = np.zeros((ny, (nx + 63) >> 6), dtype=np.uint64)  # bit set: centre covered
     h = 1.0 / pixel
     for c in range(cells.shape[0]):
         # vertices in pixel units, sorted by y: (ax, ay) <= (bx, by) <= (cx, cy)
@@ -69,14 +107,9 @@ def raster_area(xy, cells, pixel):
             hi = max(x1, x2)
             i0 = max(0, int(math.ceil(lo - 0.5)))
             i1 = min(nx - 1, int(math.floor(hi - 0.5)))
-            grid[j, i0:i1 + 1] = 1  # a memset
-    count = 0
-    for j in range(ny):
-        row = 0
-        for i in range(nx):
-            row += grid[j, i]
-        count += row
-    return count * pixel * pixel
+            if i0 <= i1:
+                _mark(grid[j], i0, i1)
+    return _count_bits(grid) * pixel * pixel
 
 
 def loop_area(xy: np.ndarray, loop: np.ndarray) -> float:
