@@ -54,8 +54,9 @@ def rows(ctx: Context, bar=None) -> list[dict]:
     else:
         ctx.note("deploy", "scene: cases/radar_traction deploy (5 m traction net, 5 cm mesh, 10 201 nodes, "
                            "0.4 s, air off)")
-    ctx.note("deploy", "CPU time: run_deploy without its two PNG plots (constant ≈ 1–4 s per run); with "
-                       "them the plots are most of a small net's stage time")
+    ctx.note("deploy", "CPU time: run_deploy without its figure (deploy.png: ≈ 0.7 s of CPU per run, 8–9× "
+                       "the default case's kernel, docs/performance.md); with it the figure is most of a "
+                       "small net's stage time")
     ctx.note("deploy", "time_to_max_area_s is sampled at deploy.output_interval (5 ms): its error is "
                        "quantised to that interval")
     pts = points(ctx.quick)
