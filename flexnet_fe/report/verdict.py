@@ -79,6 +79,10 @@ class FinVerdict:
     passed: bool | None
     marginal: bool
     loads_alternate: bool = False
+    error_kind: str | None = None
+    """how the error estimate was made: 'zz' (the stress recovery's), 'mesh_halving' (shell.peak_check)"""
+    check_pa: float | None = None
+    """the peak on the mesh halved at the loads (shell.peak_check) [Pa]"""
 
 
 @dataclass(frozen=True)
@@ -131,7 +135,8 @@ def fin_verdict(name: str, res: dict, yield_pa: float | None, yield_what: str,
         error_rel=err, allowable_pa=allow, allowable_source=source, margin=ms,
         passed=None if ms is None else ms >= 0.0,
         marginal=ms is not None and err is not None and math.isfinite(ms) and abs(ms) <= err,
-        loads_alternate=name in alternating)
+        loads_alternate=name in alternating, error_kind=res.get("peak_error_estimate_kind"),
+        check_pa=_num((res.get("peak_check") or {}).get("peak_von_mises_pa")))
 
 
 def alternating_fins(run: RunData) -> frozenset[str]:

@@ -117,6 +117,12 @@ class ShellConfig(Section):
     peak_error_tolerance: Positive = Field(
         0.02, description="a fin's peak von Mises whose estimated relative error exceeds this "
                           "adds a line to summary.shell.warnings [-]")
+    peak_check: bool = Field(
+        False, description="run each fin again on a mesh with half of local_mesh_size at its loads, from its "
+                           "window's start to its peak instant + 0.1 ms, and take the error estimate of its "
+                           "peak from the two meshes (2 |move|, Richardson at order 1; summary "
+                           "peak_check, peak_error_estimate_kind = 'mesh_halving') instead of the ZZ "
+                           "recovery's (shell.stage.check_peaks); needs local_mesh_size")
     stvenant_radius_factor: NonNegative = Field(
         2.0, description="the reported (structural) peak stress is read outside a zone of radius "
                          "factor × max(fin thickness, rope width) around every contact load "
@@ -153,6 +159,9 @@ class ShellConfig(Section):
             raise ValueError("fins = 'named' needs a non-empty fin_names")
         if self.fins is not FinSelection.NAMED and self.fin_names:
             raise ValueError("fin_names is only used with fins = 'named'")
+        if self.peak_check and (self.local_mesh_size is None or self.load is not None):
+            raise ValueError("peak_check halves local_mesh_size at the contact loads: it needs local_mesh_size "
+                             "and the collision's loads (no [shell.load])")
         return self
 
 

@@ -467,6 +467,7 @@ def finish_fin(job: FinJob, res: RunResult, shell: ShellConfig) -> dict:
             "peak_location_m": [float(v) for v in pk.location] if pk else None,
             "peak_surface": pk.surface if pk else None,
             "peak_error_estimate_rel": pk.error_estimate_rel if pk else 0.0,
+            "peak_error_estimate_kind": "zz",
             "peak_nodal_von_mises_pa": max(res.peak_vm, 0.0),
             "peak_von_mises_with_load_zones_pa": res.peak_raw,
             "stvenant_radius_m": (float(job.zones.radius.max(initial=0.0))
@@ -708,6 +709,57 @@ def _fin_summary(job: FinJob, res: dict, shell: ShellConfig, spec: FinSpec,
     return res
 
 
+PEAK_CHECK_AFTER_S = 1e-4
+"""[s] ``shell.peak_check`` runs each fin to this long after its peak instant: a rope strike's
+stress peak follows the strike within a few µs (radar × rotary's rudder_4 corner: 30 µs)."""
+
+
+def check_peaks(shell: ShellConfig, specs: list[FinSpec], results: list[RunResult], fin_res: list[dict],
+                contacts: FinContacts, accel, stage_dir: Path, log, comm, workers: int,
+                warnings: list[str]) -> None:
+    """``shell.peak_check``: each fin with a peak again, on the mesh a run at half the local size
+    would use (refined at all its loads), from the same start to its peak instant +
+    PEAK_CHECK_AFTER_S: that run's first part, so the same numbers up to there; written to
+    ``stage_dir/peak_check/<fin>/``. Each fin's result dict (``fin_res``,
+    :func:`finish_fin`) gains ``peak_check`` (the finer peak, its move over the peak, the run's size)
+    and its error estimate becomes the mesh halving's, ``peak_error_estimate_kind = "mesh_halving"``:
+    2 |σ_h/2 − σ_h| / σ_h — Richardson's error of σ_h, (σ_h/2 − σ_h) 2^p / (2^p − 1), for the
+    smallest order p = 1 (the paper fins' observed orders are 1.5–4, docs/validation.md). A stress of
+    the full run after the check's end that comes within that estimate of the finer peak is a
+    warning (the check did not see the time it could overtake in)."""
+    half = shell.model_copy(update={"local_mesh_size": shell.local_mesh_size / 2, "peak_check": False})
+    todo = [i for i, r in enumerate(fin_res) if r["peak_von_mises_pa"] > 0]
+    ends = {i: fin_res[i]["peak_time_s"] + PEAK_CHECK_AFTER_S for i in todo}
+    jobs: list[FinJob] = []
+    with progress_bar(0, f"shell peak check ({len(todo)} fins)") as bar:
+        def set_up():
+            for i in todo:
+                job = _setup_fin(half.model_copy(update={"end_time": ends[i]}), specs[i], contacts, *accel,
+                                 Path(stage_dir) / "peak_check", ends[i], log, comm)
+                jobs.append(job)
+                with IO_LOCK:
+                    bar.total += job.steps.n_steps
+                    bar.refresh()
+                yield job
+
+        fine = run_as_ready(set_up(), lambda j: run_fin(j, half, bar, log), workers)
+    for i, job, res in zip(todo, jobs, fine):
+        f, r = finish_fin(job, res, half), fin_res[i]
+        move = f["peak_von_mises_pa"] / r["peak_von_mises_pa"] - 1.0
+        later = float(results[i].vm[results[i].t > ends[i]].max(initial=0.0))
+        r["peak_check"] = {"local_mesh_size_m": half.local_mesh_size, "end_time_s": ends[i],
+                           "peak_von_mises_pa": f["peak_von_mises_pa"], "peak_time_s": f["peak_time_s"],
+                           "peak_location_m": f["peak_location_m"], "move_rel": move,
+                           "later_von_mises_pa": later, "dofs": f["dofs"], "steps": f["steps"]}
+        r["peak_zz_estimate_rel"] = r["peak_error_estimate_rel"]
+        r["peak_error_estimate_rel"], r["peak_error_estimate_kind"] = 2.0 * abs(move), "mesh_halving"
+        if later * (1.0 + 2.0 * abs(move)) > f["peak_von_mises_pa"]:
+            warnings.append(
+                f"shell {specs[i].name}: after the peak check's end ({1e3 * ends[i]:.4g} ms) the fin reaches "
+                f"{later / 1e6:.4g} MPa, within the check's error of its finer peak "
+                f"{f['peak_von_mises_pa'] / 1e6:.4g} MPa: a later peak may overtake on the finer mesh")
+
+
 def _end_time(shell: ShellConfig, contacts: FinContacts, acc_t: np.ndarray) -> float:
     last = max(contacts.t[-1] if len(contacts.t) else 0.0, acc_t[-1] if len(acc_t) else 0.0,
                shell.load.times[-1] if shell.load is not None else 0.0)
@@ -767,9 +819,11 @@ def run_shell(shell: ShellConfig, fins: list[FinSpec], contacts_npz: Path,
     t_setup, t_loops = t_setup[0], time.perf_counter()
     summary: dict = {}
     warnings: list[str] = []
-    for spec, job, res in zip(specs, jobs, results):
-        summary[spec.name] = _fin_summary(job, finish_fin(job, res, shell), shell, spec,
-                                          warnings)
+    fin_res = [finish_fin(job, res, shell) for job, res in zip(jobs, results)]
+    if shell.peak_check:
+        check_peaks(shell, specs, results, fin_res, contacts, (acc_t, acc), stage_dir, log, comm, workers, warnings)
+    for spec, job, res in zip(specs, jobs, fin_res):
+        summary[spec.name] = _fin_summary(job, res, shell, spec, warnings)
     sample = load_sampling_warning(contacts)
     if sample:
         warnings.append(sample)

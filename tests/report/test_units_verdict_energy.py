@@ -279,3 +279,19 @@ def test_a_fin_whose_loads_alternate_decides_nothing(tmp_path):
         flagged = runs > 8 and keyed
         assert [f.name for f in v.fins if f.loads_alternate] == (["rudder_1"] if flagged else [])
         assert ("rudder_1" in v.overall_reason) is (flagged or (banner == "FAIL" and rudder is over))
+
+
+def test_the_verdict_says_how_each_error_estimate_was_made():
+    # Reference: the shell summary's keys (shell.stage.finish_fin, check_peaks): the ZZ recovery's
+    # estimate, or shell.peak_check's mesh halving with the finer peak; older summaries have neither.
+    from flexnet_fe.report.verdict import fin_verdict
+
+    zz = fin_verdict("w", {"peak_von_mises_pa": 1e8, "peak_error_estimate_rel": 0.08,
+                           "peak_error_estimate_kind": "zz"}, 5e8, "y")
+    assert (zz.error_kind, zz.check_pa) == ("zz", None)
+    mh = fin_verdict("w", {"peak_von_mises_pa": 1e8, "peak_error_estimate_rel": 0.04,
+                           "peak_error_estimate_kind": "mesh_halving",
+                           "peak_check": {"peak_von_mises_pa": 1.02e8}}, 5e8, "y")
+    assert (mh.error_kind, mh.check_pa, mh.error_rel) == ("mesh_halving", 1.02e8, 0.04)
+    old = fin_verdict("w", {"peak_von_mises_pa": 1e8, "peak_error_estimate_rel": 0.08}, 5e8, "y")
+    assert (old.error_kind, old.check_pa) == (None, None)

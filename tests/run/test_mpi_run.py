@@ -110,4 +110,4 @@ def test_a_singletons_child_is_not_an_mpirun_rank(monkeypatch):
     cmd = ["mpirun", "--oversubscribe", "--allow-run-as-root", "-n", "2", sys.executable, "-c",
            "from mpi4py import MPI; print(MPI.COMM_WORLD.size)"]
     p = subprocess.run(cmd, capture_output=True, text=True, timeout=120, env=machine.launcher_env(dict(os.environ)))
-    assert p.returncode == 0 and p.stdout.split() == ["2", "2"], p.stderr[-2000:]
+    assert p.returncode == 0 and "".join(p.stdout.split()) == "22", p.stderr[-2000:]  # (two ranks' lines may interleave)

@@ -292,3 +292,38 @@ def test_local_mesh_scheme_reaches_the_mesher(tmp_path, scheme):
                                  tmp_path / "ref.msh", scheme=scheme)
     x_got, x_ref = read_msh_nodes_and_cells(got)[0], read_msh_nodes_and_cells(ref)[0]
     assert x_got.shape == x_ref.shape and np.array_equal(x_got, x_ref)
+
+
+def test_peak_check_is_the_first_part_of_a_run_at_half_the_size(tmp_path):
+    """Reference: the stage run at half the local mesh size (the second model). shell.peak_check
+    runs each fin on that run's mesh from the same start to its peak + 0.1 ms, so its peak is that
+    run's peak to the bit when that peak comes before the check's end (here it does: a 0.2 ms
+    strike); the error estimate is then 2 |move| (Richardson at order 1), the ZZ one kept apart."""
+    from flexnet_fe.missile.build import build_missile
+    from flexnet_fe.missile.config import MissileConfig
+    from flexnet_fe.missile.mesh import write_meshes
+    from flexnet_fe.shell.stage import PEAK_CHECK_AFTER_S, fin_specs
+
+    cfg = MissileConfig(preset="radar", mesh_size=0.05)
+    paths = write_meshes(cfg, tmp_path / "meshes")
+    fin = build_missile(cfg).fins[0]
+    t = np.linspace(0.0, 2e-4, 11)
+    le = fin.corners[1] + 0.4 * (fin.corners[2] - fin.corners[1])
+    np.savez(tmp_path / "c.npz", fin_names=np.array([fin.name]), t=t,
+             row_start=np.arange(12, dtype=np.int64), fin=np.zeros(11, np.int32),
+             point=np.tile(le, (11, 1)), force=np.outer(np.sin(np.pi * t / 2e-4), 5e3 * fin.n),
+             width=np.full(11, 5e-3))
+    base = ShellConfig(end_time=6e-4, bearing_rope_modulus=1e11, history_interval=1e-5)
+    specs = fin_specs([fin], paths)
+    s = run_shell(base.model_copy(update={"local_mesh_size": 0.02, "peak_check": True}), specs,
+                  tmp_path / "c.npz", None, tmp_path / "a", _log())
+    half = run_shell(base.model_copy(update={"local_mesh_size": 0.01}), specs, tmp_path / "c.npz", None,
+                     tmp_path / "b", _log())[fin.name]
+    r, c = s[fin.name], s[fin.name]["peak_check"]
+    assert half["peak_time_s"] <= c["end_time_s"] == pytest.approx(r["peak_time_s"] + PEAK_CHECK_AFTER_S)
+    assert c["peak_von_mises_pa"] == half["peak_von_mises_pa"] and c["dofs"] == half["dofs"]
+    assert c["move_rel"] == c["peak_von_mises_pa"] / r["peak_von_mises_pa"] - 1.0
+    assert r["peak_error_estimate_kind"] == "mesh_halving"
+    assert r["peak_error_estimate_rel"] == 2.0 * abs(c["move_rel"]) and r["peak_zz_estimate_rel"] > 0
+    assert c["steps"] < half["steps"]  # (cheaper: it stops after the peak)
+    assert (tmp_path / "a" / "peak_check" / fin.name / "history.csv").exists()
