@@ -672,9 +672,11 @@ def _fin_summary(job: FinJob, res: dict, shell: ShellConfig, spec: FinSpec,
             f"form) exceeds the bearing allowable {allow_b / 1e6:.4g} MPa "
             f"({shell.bearing_allowable_factor:g} x yield): the fin is crushed there")
     if res["peak_error_estimate_rel"] > shell.peak_error_tolerance:
+        how = (f" (the mesh halved at the loads reads {res['peak_check']['peak_von_mises_pa'] / 1e6:.4g} MPa)"
+               if "peak_check" in res else " (ZZ recovery)")
         warnings.append(
             f"shell {spec.name}: peak von Mises {res['peak_von_mises_pa'] / 1e6:.4g} MPa has "
-            f"an estimated error of {100 * res['peak_error_estimate_rel']:.3g} % (> "
+            f"an estimated error of {100 * res['peak_error_estimate_rel']:.3g} %{how} (> "
             f"{100 * shell.peak_error_tolerance:.3g} %, shell.peak_error_tolerance): refine "
             f"the fin mesh at the loads (shell.local_mesh_size)")
     ms = model.mass_scaling
