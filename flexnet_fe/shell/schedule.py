@@ -139,7 +139,7 @@ paper fins' fundamental period (23–26 ms), so the vibration's later maxima are
 a whole period after the last load, the four fins measured grew ×1.08–1.22 over their margins'
 largest stress (radar × traction's wing_1 and rudder_1: 42 → 51 and 32 → 36 % of their peaks;
 radar × rotary's rudders 1 and 4: 59 → 64 and 62 → 74 %) and no peak moved. Below this limit a later,
-larger peak needs ×1.33 (docs/validation.md, "After the last load")."""
+larger peak needs ×1.33 (docs/validation.md, "After the window")."""
 
 IO_LOCK = threading.Lock()
 """Held around every dolfinx/XDMF call and progress update made from a fin's thread (dolfinx

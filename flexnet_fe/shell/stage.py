@@ -700,7 +700,7 @@ def _fin_summary(job: FinJob, res: dict, shell: ShellConfig, spec: FinSpec,
             f"shell {spec.name}: after its last load the fin vibrates freely (undamped) at up to "
             f"{100 * free:.3g} % of its peak within shell.end_margin (> {100 * FREE_VIBRATION_LIMIT:.3g} "
             f"%): a later, larger peak of that vibration is not ruled out; raise shell.end_margin "
-            f"(docs/validation.md, \"After the last load\")")
+            f"(docs/validation.md, \"After the window\")")
     if bound_after > shell.peak_error_tolerance * peak:
         warnings.append(
             f"shell {spec.name}: the time window ({span}) leaves out a body acceleration of up to "
