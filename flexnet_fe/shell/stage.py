@@ -732,21 +732,24 @@ def check_peaks(shell: ShellConfig, specs: list[FinSpec], results: list[RunResul
     half = shell.model_copy(update={"local_mesh_size": shell.local_mesh_size / 2, "peak_check": False})
     todo = [i for i, r in enumerate(fin_res) if r["peak_von_mises_pa"] > 0]
     ends = {i: fin_res[i]["peak_time_s"] + PEAK_CHECK_AFTER_S for i in todo}
-    jobs: list[FinJob] = []
     with progress_bar(0, f"shell peak check ({len(todo)} fins)") as bar:
         def set_up():
             for i in todo:
                 job = _setup_fin(half.model_copy(update={"end_time": ends[i]}), specs[i], contacts, *accel,
                                  Path(stage_dir) / "peak_check", ends[i], log, comm)
-                jobs.append(job)
                 with IO_LOCK:
                     bar.total += job.steps.n_steps
                     bar.refresh()
                 yield job
 
-        fine = run_as_ready(set_up(), lambda j: run_fin(j, half, bar, log), workers)
-    for i, job, res in zip(todo, jobs, fine):
-        f, r = finish_fin(job, res, half), fin_res[i]
+        def run_and_finish(job: FinJob) -> dict:  # (the finer fin's model is freed when it ends)
+            res = run_fin(job, half, bar, log)
+            with IO_LOCK:
+                return finish_fin(job, res, half)
+
+        fine = run_as_ready(set_up(), run_and_finish, workers)
+    for i, f in zip(todo, fine):
+        r = fin_res[i]
         move = f["peak_von_mises_pa"] / r["peak_von_mises_pa"] - 1.0
         later = float(results[i].vm[results[i].t > ends[i]].max(initial=0.0))
         r["peak_check"] = {"local_mesh_size_m": half.local_mesh_size, "end_time_s": ends[i],
