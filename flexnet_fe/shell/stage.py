@@ -620,7 +620,8 @@ def omitted_stress(spec: FinSpec, shell: ShellConfig, accel_t: np.ndarray, accel
     if at.size == 0 or t_to <= t_from or end <= t_from:
         return 0.0
     inside = (at > t_from) & (at < t_to)
-    ends = np.array([[np.interp(t, at, aa[:, c]) for c in range(3)] for t in (t_from, t_to)])
+    # (zero outside the samples, as the stage's kernel reads them: shell.kernel._frame_accel)
+    ends = np.array([[np.interp(t, at, aa[:, c], left=0.0, right=0.0) for c in range(3)] for t in (t_from, t_to)])
     times = np.concatenate([[t_from], at[inside], [t_to, t_to * (1 + 1e-9) + 1e-12]]) - t_from
     values = np.vstack([ends[:1], aa[inside], ends[1:], np.zeros(3)])  # a(t) on the interval only
     if not np.any(values):
