@@ -313,12 +313,20 @@ def test_peak_check_is_the_first_part_of_a_run_at_half_the_size(tmp_path):
              row_start=np.arange(12, dtype=np.int64), fin=np.zeros(11, np.int32),
              point=np.tile(le, (11, 1)), force=np.outer(np.sin(np.pi * t / 2e-4), 5e3 * fin.n),
              width=np.full(11, 5e-3))
-    base = ShellConfig(end_time=6e-4, bearing_rope_modulus=1e11, history_interval=1e-5)
-    specs = fin_specs([fin], paths)
+    # a body deceleration too, so that a second fin without contact loads has a peak: it keeps its
+    # mesh at any local size, so it keeps its ZZ estimate (nothing to halve)
+    write_history_csv(tmp_path / "h.csv", {"t_s": t, "accel_body_x_mps2": 0 * t, "accel_body_y_mps2": 0 * t,
+                                           "accel_body_z_mps2": 2e3 * np.sin(np.pi * t / 2e-4)})
+    other = build_missile(cfg).fins[4]
+    base = ShellConfig(end_time=6e-4, bearing_rope_modulus=1e11, history_interval=1e-5, fins="named",
+                       fin_names=(fin.name, other.name))
+    specs = fin_specs([fin, other], paths)
     s = run_shell(base.model_copy(update={"local_mesh_size": 0.02, "peak_check": True}), specs,
-                  tmp_path / "c.npz", None, tmp_path / "a", _log())
-    half = run_shell(base.model_copy(update={"local_mesh_size": 0.01}), specs, tmp_path / "c.npz", None,
+                  tmp_path / "c.npz", tmp_path / "h.csv", tmp_path / "a", _log())
+    half = run_shell(base.model_copy(update={"local_mesh_size": 0.01}), specs, tmp_path / "c.npz", tmp_path / "h.csv",
                      tmp_path / "b", _log())[fin.name]
+    assert s[other.name]["peak_von_mises_pa"] > 0 and s[other.name]["peak_error_estimate_kind"] == "zz"
+    assert "peak_check" not in s[other.name]
     r, c = s[fin.name], s[fin.name]["peak_check"]
     assert half["peak_time_s"] <= c["end_time_s"] == pytest.approx(r["peak_time_s"] + PEAK_CHECK_AFTER_S)
     assert c["peak_von_mises_pa"] == half["peak_von_mises_pa"] and c["dofs"] == half["dofs"]
