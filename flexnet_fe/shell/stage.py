@@ -745,7 +745,7 @@ def check_peaks(shell: ShellConfig, specs: list[FinSpec], results: list[RunResul
                     bar.refresh()
                 yield job
 
-        def run_and_finish(job: FinJob) -> dict:  # (the finer fin's model is freed when it ends)
+        def run_and_finish(job: FinJob) -> dict:  # (finished as its run ends; no job list is kept)
             res = run_fin(job, half, bar, log)
             with IO_LOCK:
                 return finish_fin(job, res, half)
