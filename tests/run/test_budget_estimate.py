@@ -37,3 +37,15 @@ def test_collide_steps_match_the_stage(tmp_path, split):
     per_interval = cfg.output_interval * estimated / cfg.duration
     assert estimated == pytest.approx(summary["steps"], rel=1.0 / per_interval + 1e-9)
 
+
+
+def test_shell_steps_count_the_peak_check():
+    # Reference: shell.stage.check_peaks reruns each fin from its start to its peak + 0.1 ms on the
+    # mesh at half the local size, whose step is at most half (the CFL limit of the halved cells):
+    # at most twice the run's steps more, so the upper bound is 3x the run's (budget.shell_cost).
+    from flexnet_fe.budget import shell_cost
+    case, file = load_case(CASES / "radar_traction")
+    assert case.shell.peak_check and case.shell.local_mesh_size
+    without = case.model_copy(update={"shell": case.shell.model_copy(update={"peak_check": False})})
+    assert shell_cost(case, file).steps == pytest.approx(3 * shell_cost(without, file).steps, rel=1e-12)
+    assert "peak check" in shell_cost(case, file).detail
