@@ -375,3 +375,15 @@ def check_run_dir(path: Path) -> None:
     if path.is_dir() and not own and not is_run_dir(path):
         raise RunDirError(f"{path}: folder is not empty and is not a run directory (no {STATUS}); "
                           f"choose an empty or new --out")
+
+
+FIN_PEAK, FIN_STRIKE_ENVELOPE = "peak_von_mises_pa", "strike_envelope_von_mises_pa"
+"""The shell summary's keys of a fin's peak von Mises and its strike envelope [Pa]."""
+
+
+def governing_peak(fin_summary: dict) -> float | None:
+    """The von Mises stress a fin is held to [Pa], from its shell-summary entry: its strike
+    envelope where the shell stage computed one (``shell.strike_envelope``), else its peak; None
+    without either."""
+    v = fin_summary.get(FIN_STRIKE_ENVELOPE)
+    return v if v is not None else fin_summary.get(FIN_PEAK)

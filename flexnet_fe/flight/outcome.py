@@ -10,13 +10,16 @@ Used by the engagement map (``flexnet_fe.engagement_map``), which runs the cases
 
 from __future__ import annotations
 
+from flexnet_fe.runs import governing_peak
+
 
 def fin_margins(summary: dict) -> dict[str, float]:
-    """Per fin MS = allowable / peak von Mises − 1 [–], for the fins with both numbers."""
+    """Per fin MS = allowable / peak von Mises − 1 [–], for the fins with both numbers (the peak:
+    the strike envelope where the shell stage computed one, ``runs.governing_peak``)."""
     fl, sh = summary.get("flight", {}), summary.get("shell", {})
     used = fl.get("damage_from_shell", {}).get("allowable_pa", {})
-    return {k: (v.get("allowable_pa") or used[k]) / v["peak_von_mises_pa"] - 1.0 for k, v in sh.items()
-            if isinstance(v, dict) and v.get("peak_von_mises_pa") and (v.get("allowable_pa") or k in used)}
+    return {k: (v.get("allowable_pa") or used[k]) / governing_peak(v) - 1.0 for k, v in sh.items()
+            if isinstance(v, dict) and governing_peak(v) and (v.get("allowable_pa") or k in used)}
 
 
 def outcome(summary: dict) -> dict:

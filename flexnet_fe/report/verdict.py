@@ -9,7 +9,9 @@ Margin of safety (static strength, as in a stress report):
 
     MS = σ_allow / σ − 1        PASS when MS ≥ 0
 
-with σ the fin's peak von Mises stress (a ductile fin yields on von Mises) and σ_allow the
+with σ the fin's peak von Mises stress (a ductile fin yields on von Mises; its strike envelope,
+``strike_envelope_von_mises_pa``, where the shell stage computed one: the largest peak with the
+fin's loads moved up to a rope diameter along its edge, ``shell.strikes``) and σ_allow the
 shell summary's ``allowable_pa`` for that fin, or — only when the key is absent — the fin
 material's yield strength from ``resolved.json`` (``case.missile.material.yield_strength``);
 the report says which source each fin used. When the peak carries an error estimate
@@ -33,6 +35,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from flexnet_fe.report.rundir import RunData, fin_results, yield_strength
+from flexnet_fe.runs import FIN_STRIKE_ENVELOPE, governing_peak
 
 ENERGY_TOL_REL = 0.05
 """Energy-balance error above which a warning is raised when the stage gives no tolerance of
@@ -83,6 +86,9 @@ class FinVerdict:
     """how the error estimate was made: 'zz' (the stress recovery's), 'mesh_halving' (shell.peak_check)"""
     check_pa: float | None = None
     """the peak on the mesh halved at the loads (shell.peak_check) [Pa]"""
+    run_pa: float | None = None
+    """the run's own peak [Pa] where ``von_mises_pa`` is its strike envelope (shell.strike_envelope),
+    else None"""
 
 
 @dataclass(frozen=True)
@@ -120,7 +126,7 @@ def fin_verdict(name: str, res: dict, yield_pa: float | None, yield_what: str,
                 alternating: frozenset[str] = frozenset()) -> FinVerdict:
     """A fin's verdict from its shell-summary entry (``allowable_pa`` first, else yield);
     ``alternating``: the fins whose loads alternated (:func:`alternating_fins`)."""
-    vm, allow = _num(res.get("peak_von_mises_pa")), _num(res.get("allowable_pa"))
+    vm, allow = _num(governing_peak(res)), _num(res.get("allowable_pa"))
     if allow is not None:
         source = "shell summary allowable_pa"
     elif yield_pa is not None:
@@ -136,7 +142,8 @@ def fin_verdict(name: str, res: dict, yield_pa: float | None, yield_what: str,
         passed=None if ms is None else ms >= 0.0,
         marginal=ms is not None and err is not None and math.isfinite(ms) and abs(ms) <= err,
         loads_alternate=name in alternating, error_kind=res.get("peak_error_estimate_kind"),
-        check_pa=_num((res.get("peak_check") or {}).get("peak_von_mises_pa")))
+        check_pa=_num((res.get("peak_check") or {}).get("peak_von_mises_pa")),
+        run_pa=_num(res.get("peak_von_mises_pa")) if FIN_STRIKE_ENVELOPE in res else None)
 
 
 def alternating_fins(run: RunData) -> frozenset[str]:

@@ -123,6 +123,13 @@ class ShellConfig(Section):
                            "peak from the two meshes (2 |move|, Richardson at order 1; summary "
                            "peak_check, peak_error_estimate_kind = 'mesh_halving') instead of the ZZ "
                            "recovery's (shell.stage.check_peaks); needs local_mesh_size")
+    strike_envelope: bool = Field(
+        False, description="run each loaded fin again with all its contact loads moved in span along its "
+                           "leading edge by -1, -1/2, +1/2, +1 rope diameters (kept on the fin), from its "
+                           "window's start to its peak instant + 0.1 ms; the largest peak of these and the "
+                           "run is the fin's strike_envelope_von_mises_pa, which the verdict holds the fin "
+                           "to: the model does not fix where a rope strikes an edge to better than about its "
+                           "diameter (shell.strikes, docs/validation.md 'Where the rope strikes')")
     stvenant_radius_factor: NonNegative = Field(
         2.0, description="the reported (structural) peak stress is read outside a zone of radius "
                          "factor × max(fin thickness, rope width) around every contact load "
@@ -162,6 +169,9 @@ class ShellConfig(Section):
         if self.peak_check and (self.local_mesh_size is None or self.load is not None):
             raise ValueError("peak_check halves local_mesh_size at the contact loads: it needs local_mesh_size "
                              "and the collision's loads (no [shell.load])")
+        if self.strike_envelope and self.load is not None:
+            raise ValueError("strike_envelope moves the collision's contact loads: it cannot be used with "
+                             "[shell.load]")
         return self
 
 

@@ -15,7 +15,7 @@ from __future__ import annotations
 import logging
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -35,12 +35,12 @@ from flexnet_fe.shell.forms import NDOF_NODE, ShellMaterial
 from flexnet_fe.shell.meshio import load_fin_mesh
 from flexnet_fe.machine import cpu_count
 from flexnet_fe.shell.model import ShellModel, build_model
-from flexnet_fe.shell import hotspot
+from flexnet_fe.shell import hotspot, strikes
 from flexnet_fe.shell.recovery import build_recovery, locate_peak, stress_tensors, von_mises
 from flexnet_fe.shell.schedule import (FREE_VIBRATION_LIMIT, IO_LOCK, FinWindow,
                                       fin_window, run_as_ready, window_steps)
 from flexnet_fe.shell.solve import ParallelSampler, RunResult, recovery_for, run
-from flexnet_fe.runs import ENVELOPE_XDMF, FIELDS_XDMF, HISTORY
+from flexnet_fe.runs import ENVELOPE_XDMF, FIELDS_XDMF, FIN_STRIKE_ENVELOPE, HISTORY
 
 ACCEL_COLUMNS = ("accel_body_x_mps2", "accel_body_y_mps2", "accel_body_z_mps2")
 
@@ -707,6 +707,30 @@ def _fin_summary(job: FinJob, res: dict, shell: ShellConfig, spec: FinSpec,
     return res
 
 
+def rerun_fins(shell: ShellConfig, runs: list[tuple[FinSpec, FinContacts, Path, float]], accel, title: str,
+               log, comm, workers: int) -> list[dict]:
+    """Fins run again, each (spec, its loads, the folder its output goes under, its end time [s])
+    with ``shell`` (its end_time set to that end), set up one after the other and run on
+    ``workers`` threads as they are set up; each one's result dict (:func:`finish_fin`) in order,
+    finished as its run ends (no job list is kept: the check's memory is one fin per thread)."""
+    with progress_bar(0, title) as bar:
+        def set_up():
+            for spec, contacts, folder, end in runs:
+                job = _setup_fin(shell.model_copy(update={"end_time": end}), spec, contacts, *accel, folder, end,
+                                 log, comm)
+                with IO_LOCK:
+                    bar.total += job.steps.n_steps
+                    bar.refresh()
+                yield job
+
+        def run_and_finish(job: FinJob) -> dict:
+            res = run_fin(job, shell, bar, log)
+            with IO_LOCK:
+                return finish_fin(job, res, shell)
+
+        return run_as_ready(set_up(), run_and_finish, workers)
+
+
 PEAK_CHECK_AFTER_S = 1e-4
 """[s] ``shell.peak_check`` runs each fin to this long after its peak instant: a rope strike's
 stress peak follows the strike within a few µs (radar × rotary's rudder_4 corner: 30 µs)."""
@@ -730,22 +754,8 @@ def check_peaks(shell: ShellConfig, specs: list[FinSpec], results: list[RunResul
     # (a fin without contact loads keeps its mesh at any local size: nothing to halve, ZZ stays)
     todo = [i for i, r in enumerate(fin_res) if r["peak_von_mises_pa"] > 0 and specs[i].name in loaded]
     ends = {i: fin_res[i]["peak_time_s"] + PEAK_CHECK_AFTER_S for i in todo}
-    with progress_bar(0, f"shell peak check ({len(todo)} fins)") as bar:
-        def set_up():
-            for i in todo:
-                job = _setup_fin(half.model_copy(update={"end_time": ends[i]}), specs[i], contacts, *accel,
-                                 Path(stage_dir) / "peak_check", ends[i], log, comm)
-                with IO_LOCK:
-                    bar.total += job.steps.n_steps
-                    bar.refresh()
-                yield job
-
-        def run_and_finish(job: FinJob) -> dict:  # (finished as its run ends; no job list is kept)
-            res = run_fin(job, half, bar, log)
-            with IO_LOCK:
-                return finish_fin(job, res, half)
-
-        fine = run_as_ready(set_up(), run_and_finish, workers)
+    fine = rerun_fins(half, [(specs[i], contacts, Path(stage_dir) / "peak_check", ends[i]) for i in todo],
+                      accel, f"shell peak check ({len(todo)} fins)", log, comm, workers)
     for i, f in zip(todo, fine):
         r = fin_res[i]
         move = f["peak_von_mises_pa"] / r["peak_von_mises_pa"] - 1.0
@@ -761,6 +771,53 @@ def check_peaks(shell: ShellConfig, specs: list[FinSpec], results: list[RunResul
                 f"shell {specs[i].name}: after the peak check's end ({1e3 * ends[i]:.4g} ms) the fin reaches "
                 f"{later / 1e6:.4g} MPa, within the check's error of its finer peak "
                 f"{f['peak_von_mises_pa'] / 1e6:.4g} MPa: a later peak may overtake on the finer mesh")
+
+
+def check_strikes(shell: ShellConfig, specs: list[FinSpec], fin_res: list[dict], contacts: FinContacts,
+                  accel, stage_dir: Path, log, comm, workers: int) -> None:
+    """``shell.strike_envelope``: each loaded fin with a peak again, with all its contact loads
+    moved in span along its leading edge by each of :data:`strikes.STRIKE_OFFSETS` × its rope
+    diameter (the largest contact width; ``strikes.move_along_leading_edge``, kept on the fin),
+    on the mesh its run would build for those loads, from its window's start to its peak instant
+    + PEAK_CHECK_AFTER_S; written to ``stage_dir/strike_envelope/<offset>/<fin>/``. Each fin's
+    result dict gains ``strike_envelope`` (offsets [m], their peaks [Pa], the largest and its
+    offset) and ``strike_envelope_von_mises_pa``: the largest of those peaks and the fin's own —
+    a bound over where along its edge the rope strikes, which the model does not fix to better
+    than about a diameter (``shell.strikes``). The move keeps every force and instant, so momentum
+    and the impulse per fin are those of the collision."""
+    from flexnet_fe.missile.mesh import fin_outline_from_msh
+    base = shell.model_copy(update={"peak_check": False, "strike_envelope": False})
+    loaded = {n: k for k, n in enumerate(contacts.fin_names) if np.any(contacts.fin == k)}
+    todo = [i for i, r in enumerate(fin_res) if r["peak_von_mises_pa"] > 0 and specs[i].name in loaded]
+    runs = [(i, f) for i in todo for f in strikes.STRIKE_OFFSETS]
+    ends = {i: fin_res[i]["peak_time_s"] + PEAK_CHECK_AFTER_S for i in todo}
+    moves = {}
+    for i in todo:
+        k = loaded[specs[i].name]
+        mine = contacts.fin == k
+        pf = strikes.planform(fin_outline_from_msh(specs[i].mesh_path)[0])
+        d = float(contacts.width[mine].max())
+        for f in strikes.STRIKE_OFFSETS:
+            point = contacts.point.copy()
+            point[mine] = strikes.move_along_leading_edge(contacts.point[mine], pf, f * d)
+            moves[i, f] = (f * d, replace(contacts, point=point))
+    moved = rerun_fins(base, [(specs[i], moves[i, f][1], Path(stage_dir) / "strike_envelope" / f"{f:+g}d", ends[i])
+                              for i, f in runs], accel,
+                       f"shell strike envelope ({len(todo)} fins x {len(strikes.STRIKE_OFFSETS)} moves)",
+                       log, comm, workers)
+    for i in todo:
+        r = fin_res[i]
+        mine = [(moves[j, f][0], m) for (j, f), m in zip(runs, moved) if j == i]
+        peaks = [m["peak_von_mises_pa"] for _, m in mine]
+        top = max(range(len(mine)), key=peaks.__getitem__)
+        envelope = max(r["peak_von_mises_pa"], peaks[top])
+        r[FIN_STRIKE_ENVELOPE] = envelope
+        r["strike_envelope"] = {
+            "offsets_m": [o for o, _ in mine], "peaks_pa": peaks,
+            "peak_times_s": [m["peak_time_s"] for _, m in mine],
+            "peak_locations_m": [m["peak_location_m"] for _, m in mine],
+            "end_time_s": ends[i], "rise_rel": envelope / r["peak_von_mises_pa"] - 1.0,
+            "offset_of_max_m": mine[top][0] if peaks[top] > r["peak_von_mises_pa"] else 0.0}
 
 
 def _end_time(shell: ShellConfig, contacts: FinContacts, acc_t: np.ndarray) -> float:
@@ -825,6 +882,8 @@ def run_shell(shell: ShellConfig, fins: list[FinSpec], contacts_npz: Path,
     fin_res = [finish_fin(job, res, shell) for job, res in zip(jobs, results)]
     if shell.peak_check:
         check_peaks(shell, specs, results, fin_res, contacts, (acc_t, acc), stage_dir, log, comm, workers, warnings)
+    if shell.strike_envelope:
+        check_strikes(shell, specs, fin_res, contacts, (acc_t, acc), stage_dir, log, comm, workers)
     for spec, job, res in zip(specs, jobs, fin_res):
         summary[spec.name] = _fin_summary(job, res, shell, spec, warnings)
     sample = load_sampling_warning(contacts)

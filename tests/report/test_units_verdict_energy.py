@@ -295,3 +295,20 @@ def test_the_verdict_says_how_each_error_estimate_was_made():
     assert (mh.error_kind, mh.check_pa, mh.error_rel) == ("mesh_halving", 1.02e8, 0.04)
     old = fin_verdict("w", {"peak_von_mises_pa": 1e8, "peak_error_estimate_rel": 0.08}, 5e8, "y")
     assert (old.error_kind, old.check_pa) == (None, None)
+
+
+def test_a_fin_is_held_to_its_strike_envelope():
+    # Reference: MS = allowable / σ − 1 with σ the strike envelope where the shell summary has one
+    # (shell.stage.check_strikes): a fin whose own strike passes and whose envelope exceeds the
+    # allowable fails; the run's own peak is kept for the report; the flight outcome's margins
+    # (flight.outcome.fin_margins) take the same stress.
+    from flexnet_fe.flight.outcome import fin_margins
+    from flexnet_fe.report.verdict import fin_verdict
+
+    res = {"peak_von_mises_pa": 4.0e8, "strike_envelope_von_mises_pa": 5.5e8, "allowable_pa": 5.0e8}
+    v = fin_verdict("rudder_2", res, None, "y")
+    assert (v.von_mises_pa, v.run_pa) == (5.5e8, 4.0e8)
+    assert v.margin == pytest.approx(5.0 / 5.5 - 1.0) and v.passed is False
+    plain = fin_verdict("rudder_2", {"peak_von_mises_pa": 4.0e8, "allowable_pa": 5.0e8}, None, "y")
+    assert plain.run_pa is None and plain.passed and plain.margin == pytest.approx(0.25)
+    assert fin_margins({"shell": {"rudder_2": res}}) == {"rudder_2": pytest.approx(5.0 / 5.5 - 1.0)}

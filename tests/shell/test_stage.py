@@ -335,3 +335,47 @@ def test_peak_check_is_the_first_part_of_a_run_at_half_the_size(tmp_path):
     assert r["peak_error_estimate_rel"] == 2.0 * abs(c["move_rel"]) and r["peak_zz_estimate_rel"] > 0
     assert c["steps"] < half["steps"]  # (cheaper: it stops after the peak)
     assert (tmp_path / "a" / "peak_check" / fin.name / "history.csv").exists()
+
+
+def test_strike_envelope_is_the_run_with_the_loads_moved_along_the_edge(tmp_path):
+    """Reference: the stage run on loads moved by hand (closed form: a leading-edge point at
+    fraction λ of the edge moves to λ + δ/span) with the envelope run's end time (the second
+    model): shell.strike_envelope's peak for that move equals it to the bit, and the envelope is the
+    largest of the moved peaks and the fin's own."""
+    from flexnet_fe.missile.build import build_missile
+    from flexnet_fe.missile.config import MissileConfig
+    from flexnet_fe.missile.mesh import write_meshes
+    from flexnet_fe.shell.stage import PEAK_CHECK_AFTER_S, fin_specs
+    from flexnet_fe.shell.strikes import STRIKE_OFFSETS
+
+    cfg = MissileConfig(preset="radar", mesh_size=0.05)
+    paths = write_meshes(cfg, tmp_path / "meshes")
+    fin = build_missile(cfg).fins[0]
+    c0, c1, c2 = fin.corners[:3]  # root trailing edge; root and tip of the leading edge
+    root = (c1 - c0) / np.linalg.norm(c1 - c0)
+    span = float(np.linalg.norm((c2 - c1) - ((c2 - c1) @ root) * root))
+    t = np.linspace(0.0, 2e-4, 11)
+    width = 5e-3
+
+    def contacts(path, lam):
+        np.savez(path, fin_names=np.array([fin.name]), t=t, row_start=np.arange(12, dtype=np.int64),
+                 fin=np.zeros(11, np.int32), point=np.tile(c1 + lam * (c2 - c1), (11, 1)),
+                 force=np.outer(np.sin(np.pi * t / 2e-4), 5e3 * fin.n), width=np.full(11, width))
+
+    contacts(tmp_path / "c.npz", 0.1)
+    base = ShellConfig(end_time=6e-4, bearing_rope_modulus=1e11, history_interval=1e-5, fins="named",
+                       fin_names=(fin.name,))
+    specs = fin_specs([fin], paths)
+    r = run_shell(base.model_copy(update={"strike_envelope": True}), specs, tmp_path / "c.npz", None,
+                  tmp_path / "a", _log())[fin.name]
+    e = r["strike_envelope"]
+    assert e["offsets_m"] == pytest.approx([f * width for f in STRIKE_OFFSETS], rel=1e-12)
+    assert e["end_time_s"] == pytest.approx(r["peak_time_s"] + PEAK_CHECK_AFTER_S)
+    k = len(STRIKE_OFFSETS) - 1  # the largest move out
+    contacts(tmp_path / "m.npz", 0.1 + e["offsets_m"][k] / span)
+    ref = run_shell(base.model_copy(update={"end_time": e["end_time_s"]}), specs, tmp_path / "m.npz", None,
+                    tmp_path / "b", _log())[fin.name]
+    assert e["peaks_pa"][k] == ref["peak_von_mises_pa"]
+    assert r["strike_envelope_von_mises_pa"] == max(e["peaks_pa"] + [r["peak_von_mises_pa"]])
+    assert len(set(e["peaks_pa"])) == len(STRIKE_OFFSETS)  # each move is its own run
+    assert (tmp_path / "a" / "strike_envelope" / "+1d" / fin.name / "history.csv").exists()
