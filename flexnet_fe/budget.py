@@ -25,6 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from flexnet_fe.errors import CaseError
+from flexnet_fe.shell.strikes import STRIKE_OFFSETS
 
 MAX_STEPS = 1e9
 """Largest number of time steps one stage may take [-] (≈ hours at the fastest kernels' ~1 µs
@@ -237,7 +238,8 @@ def shell_cost(case, file) -> StageCost:
     (``shell.window = "fin"`` simulates about half of it on radar_traction) or how many fins
     share the ``shell.workers`` threads. ``shell.peak_check`` reruns each fin at half the local
     size up to its peak (``shell.stage.check_peaks``): at most the same span at half the step,
-    so the bound's steps ×3; its memory is that of a mesh with ≈ 4× the nodes of the refined zones,
+    so the bound's steps +2×; ``shell.strike_envelope`` reruns each fin at the same size up to its
+    peak once per move (``shell.strikes.STRIKE_OFFSETS``): +1× per move. The check's memory is that of a mesh with ≈ 4× the nodes of the refined zones,
     which are not counted here (measured on the paper cases: docs/performance.md)."""
     m, sh = case.missile, case.shell
     h = m.mesh_size
@@ -251,14 +253,15 @@ def shell_cost(case, file) -> StageCost:
     dt = sh.safety_factor * SHELL_STEP_FACTOR * h_min / cp
     outputs = end / sh.field_interval if sh.field_interval else 40
     mem = BASE_PROCESS + max(1e3 * elements, 2e3 * 6 * nodes)
-    steps = end / dt * (3 if sh.peak_check else 1)
+    steps = end / dt * (1 + (2 if sh.peak_check else 0) + (len(STRIKE_OFFSETS) if sh.strike_envelope else 0))
     cost = StageCost("shell", nodes, 6 * nodes, steps, mem, 8 * F8 * elements * outputs,
                      {"nodes": "missile.mesh_size", "steps": "shell.local_mesh_size" if h_min < h else "missile.mesh_size",
                       "memory": "missile.mesh_size",
                       "disk": "shell.field_interval"})
     cost.detail = (f"{elements:.3g} fin elements of size missile.mesh_size (refined zones not counted), "
                    f"dt ≈ {dt:.3g} s from the smallest element size {h_min:.3g} m, end {end:.3g} s"
-                   + (", the peak check's rerun at half the local size counted" if sh.peak_check else ""))
+                   + (", the peak check's rerun at half the local size counted" if sh.peak_check else "")
+                   + (", the strike envelope's reruns counted" if sh.strike_envelope else ""))
     return cost
 
 

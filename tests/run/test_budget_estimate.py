@@ -39,13 +39,20 @@ def test_collide_steps_match_the_stage(tmp_path, split):
 
 
 
-def test_shell_steps_count_the_peak_check():
+def test_shell_steps_count_the_peak_check_and_the_strike_envelope():
     # Reference: shell.stage.check_peaks reruns each fin from its start to its peak + 0.1 ms on the
     # mesh at half the local size, whose step is at most half (the CFL limit of the halved cells):
     # at most twice the run's steps more, so the upper bound is 3x the run's (budget.shell_cost).
     from flexnet_fe.budget import shell_cost
     case, file = load_case(CASES / "radar_traction")
     assert case.shell.peak_check and case.shell.local_mesh_size
-    without = case.model_copy(update={"shell": case.shell.model_copy(update={"peak_check": False})})
-    assert shell_cost(case, file).steps == pytest.approx(3 * shell_cost(without, file).steps, rel=1e-12)
-    assert "peak check" in shell_cost(case, file).detail
+    # shell.strike_envelope reruns each fin at the same size up to its peak once per move: at most
+    # the run's steps again per move (shell.strikes.STRIKE_OFFSETS, four).
+    bare = case.model_copy(update={"shell": case.shell.model_copy(update={"peak_check": False,
+                                                                           "strike_envelope": False})})
+    check = bare.model_copy(update={"shell": bare.shell.model_copy(update={"peak_check": True})})
+    envelope = bare.model_copy(update={"shell": bare.shell.model_copy(update={"strike_envelope": True})})
+    n = shell_cost(bare, file).steps
+    assert shell_cost(check, file).steps == pytest.approx(3 * n, rel=1e-12)
+    assert shell_cost(envelope, file).steps == pytest.approx(5 * n, rel=1e-12)
+    assert "peak check" in shell_cost(check, file).detail and "strike envelope" in shell_cost(envelope, file).detail
