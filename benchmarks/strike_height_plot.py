@@ -46,7 +46,7 @@ def main() -> None:
         for hh, ll in zip(h, lab):
             seen.setdefault(ll, hh)
         ax.legend(seen.values(), seen.keys(), fontsize=7, loc="lower center")
-    axes[0].set_ylabel("peak von Mises (structural, outside the St-Venant zones) [MPa]")
+    axes[0].set_ylabel("peak von Mises, structural [MPa]")
     fig.suptitle("Where the rope strikes sets the rudder peaks (dotted: each run's strike envelope)", fontsize=10)
     fig.tight_layout()
     out = DOCS / "img" / "strike_height.png"

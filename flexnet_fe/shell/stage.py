@@ -191,8 +191,9 @@ def load_sampling_warning(contacts: FinContacts) -> str:
             f"in the rope: they come from single strikes of the rope on the leading edges, whose peak force follows "
             f"the contact's stiffness per unit of rope mass — net.transverse_modulus, which the paper does not give "
             f"(radar_traction's rudders 2 and 3: 173 and 372 MPa at 10 GPa, 684 and 758 MPa at 100 GPa) — and the "
-            f"rope's discretisation (one clean strike's peak ±2 %, a strike of a rope bundle ±20 % as the rope is cut "
-            f"finer; docs/validation.md, \"The line law per metre of rest length\")")
+            f"rope's discretisation and the aim (radar_traction, rope pieces 0.7 / 1.4 / 2.8 mm and the aim point moved "
+            f"0.5–1 mm: rudder peaks ±20–27 %, their strike envelopes (shell.strike_envelope) ±8–20 %; "
+            f"docs/validation.md, \"Where the rope strikes\")")
 
 
 def fin_load_history(model: ShellModel, contacts: FinContacts, fin_index: int,
