@@ -15,6 +15,7 @@ from __future__ import annotations
 import logging
 import math
 import time
+from collections.abc import Iterable
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -708,12 +709,13 @@ def _fin_summary(job: FinJob, res: dict, shell: ShellConfig, spec: FinSpec,
     return res
 
 
-def rerun_fins(shell: ShellConfig, runs: list[tuple[FinSpec, FinContacts, Path, float]], accel, title: str,
+def rerun_fins(shell: ShellConfig, runs: Iterable[tuple[FinSpec, FinContacts, Path, float]], accel, title: str,
                log, comm, workers: int) -> list[dict]:
     """Fins run again, each (spec, its loads, the folder its output goes under, its end time [s])
     with ``shell`` (its end_time set to that end), set up one after the other and run on
     ``workers`` threads as they are set up; each one's result dict (:func:`finish_fin`) in order,
-    finished as its run ends (no job list is kept: the check's memory is one fin per thread)."""
+    finished as its run ends (no job list is kept: the check's memory is one fin per thread).
+    ``runs`` may be a generator: it is read as the fins are set up."""
     with progress_bar(0, title) as bar:
         def set_up():
             for spec, contacts, folder, end in runs:
@@ -792,23 +794,26 @@ def check_strikes(shell: ShellConfig, specs: list[FinSpec], fin_res: list[dict],
     todo = [i for i, r in enumerate(fin_res) if r["peak_von_mises_pa"] > 0 and specs[i].name in loaded]
     runs = [(i, f) for i in todo for f in strikes.STRIKE_OFFSETS]
     ends = {i: fin_res[i]["peak_time_s"] + PEAK_CHECK_AFTER_S for i in todo}
-    moves = {}
+    frames, diameters = {}, {}
     for i in todo:
-        k = loaded[specs[i].name]
-        mine = contacts.fin == k
-        pf = strikes.planform(fin_outline_from_msh(specs[i].mesh_path)[0])
-        d = float(contacts.width[mine].max())
-        for f in strikes.STRIKE_OFFSETS:
+        mine = contacts.fin == loaded[specs[i].name]
+        frames[i] = strikes.planform(fin_outline_from_msh(specs[i].mesh_path)[0])
+        diameters[i] = float(contacts.width[mine].max())
+
+    def moved_runs():  # each moved copy of the loads made as its fin is set up, then dropped
+        for i, f in runs:
+            mine = contacts.fin == loaded[specs[i].name]
             point = contacts.point.copy()
-            point[mine] = strikes.move_along_leading_edge(contacts.point[mine], pf, f * d)
-            moves[i, f] = (f * d, replace(contacts, point=point))
-    moved = rerun_fins(base, [(specs[i], moves[i, f][1], Path(stage_dir) / "strike_envelope" / f"{f:+g}d", ends[i])
-                              for i, f in runs], accel,
+            point[mine] = strikes.move_along_leading_edge(contacts.point[mine], frames[i], f * diameters[i])
+            yield (specs[i], replace(contacts, point=point), Path(stage_dir) / "strike_envelope" / f"{f:+g}d",
+                   ends[i])
+
+    moved = rerun_fins(base, moved_runs(), accel,
                        f"shell strike envelope ({len(todo)} fins x {len(strikes.STRIKE_OFFSETS)} moves)",
                        log, comm, workers)
     for i in todo:
         r = fin_res[i]
-        mine = [(moves[j, f][0], m) for (j, f), m in zip(runs, moved) if j == i]
+        mine = [(f * diameters[i], m) for (j, f), m in zip(runs, moved) if j == i]
         peaks = [m["peak_von_mises_pa"] for _, m in mine]
         top = max(range(len(mine)), key=peaks.__getitem__)
         envelope = max(r["peak_von_mises_pa"], peaks[top])
