@@ -1,16 +1,17 @@
 """Where along its edge a rope strikes a fin: the strike envelope of ``shell.strike_envelope``
 (issue 10).
 
-Why: a rudder's peak stress in the paper cases follows one strike of the rope, which rides on
-the body, on the fin's leading edge 1.5–4.5 mm above the clamped root. The peak depends steeply
-on that height (radar × traction's rudder_2, the same loads moved along the edge: 186 / 269 /
-287 / 327 / 325 / 328 / 269 MPa at 1.5 / 2.5 / 3.5 / 4.5 / 5.5 / 7.5 / 9.5 mm), and the height is
-not determined by the model to better than about a rope diameter: it moves 1.5 → 3.5 → 4.5 mm
-between rope pieces of 1.4 / 0.7 / 2.8 mm, and an aim point moved by 1 mm moves the rudder peaks
-by up to 16 % (docs/validation.md, "Where the rope strikes"). A peak read at the one simulated
-height is therefore one sample of a number the model does not define; the largest peak over
-strike positions within a rope diameter of the simulated one is defined (the same within ≈ 2 %
-from each of those runs) and is what a designer must hold the fin to.
+Why: a rudder's peak stress in the paper cases follows one strike of the rope on its leading edge,
+rope that rides on the body striking 1–10 mm above the clamped root. The peak depends steeply on
+that height (radar × traction's rudder_2, the same loads moved along the edge: 186 / 269 / 287 /
+327 / 325 / 328 / 269 MPa at 1.5 / 2.5 / 3.5 / 4.5 / 5.5 / 7.5 / 9.5 mm), and the model does not
+fix the height to better than about a rope diameter: 0.97–1.7 mm at rope pieces of 1.4 mm (aim
+point moved by 0.5–1 mm), 2.8–3.4 mm at 0.7 mm, 4.2 mm at 2.8 mm (docs/validation.md, "Where the
+rope strikes"). A peak read at the one simulated height is one sample of that curve; the largest
+peak over strike positions within a rope diameter of the simulated one is what a designer must
+hold the fin to. It removes the height's share of the scatter (rudder_2 over seven such runs:
+177–305 MPa, envelope 307–363), not the strike's strength (how much rope arrives together:
+rudder_4 ±20 % either way): a single run's fin peaks stay undefined to ±8–20 %.
 
 This module holds the geometry (pure functions): the fin's planform frame from its four corners
 and the rigid move of a fin's load points along its leading edge, kept on the planform.
