@@ -526,6 +526,11 @@ def fin_specs(fins, mesh_paths: dict) -> list[FinSpec]:
                     yield_strength=f.material.yield_strength) for f in fins]
 
 
+def loaded_fins(contacts: FinContacts) -> dict[str, int]:
+    """Fin name → its index in ``contacts`` for the fins with at least one contact load."""
+    return {contacts.fin_names[int(k)]: int(k) for k in np.unique(contacts.fin)}
+
+
 def select_fins(shell: ShellConfig, fins: list[FinSpec], contacts: FinContacts) -> list[FinSpec]:
     """The fins the stage solves (``shell.fins``)."""
     names = [f.name for f in fins]
@@ -536,7 +541,7 @@ def select_fins(shell: ShellConfig, fins: list[FinSpec], contacts: FinContacts) 
         if unknown:
             raise CaseError("case.toml", "shell.fin_names", f"unknown fin(s) {unknown}; fins: {names}")
         return [f for f in fins if f.name in shell.fin_names]
-    loaded = {contacts.fin_names[i] for i in np.unique(contacts.fin)}
+    loaded = loaded_fins(contacts)
     return [f for f in fins if f.name in loaded]
 
 
@@ -753,7 +758,7 @@ def check_peaks(shell: ShellConfig, specs: list[FinSpec], results: list[RunResul
     the full run after the check's end that comes within that estimate of the finer peak is a
     warning (the check did not see the time it could overtake in)."""
     half = shell.model_copy(update={"local_mesh_size": shell.local_mesh_size / 2, "peak_check": False})
-    loaded = {n for k, n in enumerate(contacts.fin_names) if np.any(contacts.fin == k)}
+    loaded = loaded_fins(contacts)
     # (a fin without contact loads keeps its mesh at any local size: nothing to halve, ZZ stays)
     todo = [i for i, r in enumerate(fin_res) if r["peak_von_mises_pa"] > 0 and specs[i].name in loaded]
     ends = {i: fin_res[i]["peak_time_s"] + PEAK_CHECK_AFTER_S for i in todo}
@@ -783,14 +788,14 @@ def check_strikes(shell: ShellConfig, specs: list[FinSpec], fin_res: list[dict],
     diameter (the largest contact width; ``strikes.move_along_leading_edge``, kept on the fin),
     on the mesh its run would build for those loads, from its window's start to its peak instant
     + PEAK_CHECK_AFTER_S; written to ``stage_dir/strike_envelope/<offset>/<fin>/``. Each fin's
-    result dict gains ``strike_envelope`` (offsets [m], their peaks [Pa], the largest and its
-    offset) and ``strike_envelope_von_mises_pa``: the largest of those peaks and the fin's own —
+    result dict gains ``strike_envelope`` (offsets [m], their peaks [Pa], times [s] and locations
+    [m], the reruns' end [s]) and ``strike_envelope_von_mises_pa``: the largest of those peaks and the fin's own —
     a bound over where along its edge the rope strikes, which the model does not fix to better
     than about a diameter (``shell.strikes``). The move keeps every force and instant, so momentum
     and the impulse per fin are those of the collision."""
     from flexnet_fe.missile.mesh import fin_outline_from_msh
     base = shell.model_copy(update={"peak_check": False, "strike_envelope": False})
-    loaded = {n: k for k, n in enumerate(contacts.fin_names) if np.any(contacts.fin == k)}
+    loaded = loaded_fins(contacts)
     todo = [i for i, r in enumerate(fin_res) if r["peak_von_mises_pa"] > 0 and specs[i].name in loaded]
     runs = [(i, f) for i in todo for f in strikes.STRIKE_OFFSETS]
     ends = {i: fin_res[i]["peak_time_s"] + PEAK_CHECK_AFTER_S for i in todo}
@@ -815,15 +820,11 @@ def check_strikes(shell: ShellConfig, specs: list[FinSpec], fin_res: list[dict],
         r = fin_res[i]
         mine = [(f * diameters[i], m) for (j, f), m in zip(runs, moved) if j == i]
         peaks = [m["peak_von_mises_pa"] for _, m in mine]
-        top = max(range(len(mine)), key=peaks.__getitem__)
-        envelope = max(r["peak_von_mises_pa"], peaks[top])
-        r[FIN_STRIKE_ENVELOPE] = envelope
+        r[FIN_STRIKE_ENVELOPE] = max([r["peak_von_mises_pa"], *peaks])
         r["strike_envelope"] = {
             "offsets_m": [o for o, _ in mine], "peaks_pa": peaks,
             "peak_times_s": [m["peak_time_s"] for _, m in mine],
-            "peak_locations_m": [m["peak_location_m"] for _, m in mine],
-            "end_time_s": ends[i], "rise_rel": envelope / r["peak_von_mises_pa"] - 1.0,
-            "offset_of_max_m": mine[top][0] if peaks[top] > r["peak_von_mises_pa"] else 0.0}
+            "peak_locations_m": [m["peak_location_m"] for _, m in mine], "end_time_s": ends[i]}
 
 
 def _end_time(shell: ShellConfig, contacts: FinContacts, acc_t: np.ndarray) -> float:
