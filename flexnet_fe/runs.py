@@ -77,6 +77,10 @@ SWEEP_TABLE = "sweep.csv"
 BATCH_TABLE = "batch.csv"
 MAP_TABLE = "map.csv"
 """the engagement map's table (``flexnet_fe.engagement_map``; its picture has the same stem, .png)."""
+ENSEMBLE_TABLE = "ensemble.csv"
+"""an ensemble folder's member table (``flexnet_fe.ensemble``; its picture has the same stem, .png)."""
+ENSEMBLE_STATS = "ensemble.json"
+"""an ensemble folder's statistics (``flexnet_fe.ensemble.summarise``)."""
 
 STATES = ("pending", "running", "done", "failed", "interrupted", "stale")
 
