@@ -169,10 +169,10 @@ def cmd_batch(args) -> int:
 
 def cmd_report(args) -> int:
     from flexnet_fe.report import build_report, build_sweep_report
-    from flexnet_fe.runs import BATCH_TABLE, SWEEP_TABLE, is_run_dir
+    from flexnet_fe.runs import BATCH_TABLE, ENSEMBLE_TABLE, SWEEP_TABLE, is_run_dir
 
     target = Path(args.target)
-    tables = [target / t for t in (SWEEP_TABLE, BATCH_TABLE)] if target.is_dir() else []
+    tables = [target / t for t in (SWEEP_TABLE, BATCH_TABLE, ENSEMBLE_TABLE)] if target.is_dir() else []
     table = next((t for t in tables if t.is_file()), None)
     if args.sweep or (table is not None and not is_run_dir(target)):
         path = build_sweep_report(table or target, args.param or None)
@@ -239,6 +239,17 @@ def _add_study_parser(sub) -> None:
     sp.add_argument("--run-dir", help="throughput: take the end-to-end stage times from this run directory "
                                       "(default: the full study runs cases/radar_traction itself)")
     sp.set_defaults(func=cmd_study)
+
+
+def _add_report_parser(sub) -> None:
+    """The `flexnet report` subcommand."""
+    sp = sub.add_parser("report", help="write report.html for a run directory, or a sweep/batch/ensemble folder "
+                                       "or table")
+    sp.add_argument("target", help="run directory, sweep/batch/ensemble folder, or a sweep.csv / batch.csv / "
+                                   "ensemble.csv")
+    sp.add_argument("--sweep", action="store_true", help="TARGET is a sweep or batch table")
+    sp.add_argument("--param", action="append", metavar="KEY", help="swept parameter columns (default: detected)")
+    sp.set_defaults(func=cmd_report)
 
 
 def _add_ensemble_parser(sub, add_case, add_pool, add_force) -> None:
@@ -330,11 +341,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_force(sp, "redo cases that are already done")
     sp.set_defaults(func=cmd_batch)
 
-    sp = sub.add_parser("report", help="write report.html for a run directory, or a sweep/batch folder or table")
-    sp.add_argument("target", help="run directory, sweep/batch folder, or a sweep.csv / batch.csv")
-    sp.add_argument("--sweep", action="store_true", help="TARGET is a sweep or batch table")
-    sp.add_argument("--param", action="append", metavar="KEY", help="swept parameter columns (default: detected)")
-    sp.set_defaults(func=cmd_report)
+    _add_report_parser(sub)
 
     _add_study_parser(sub)
 

@@ -19,6 +19,7 @@ plotted.
 from __future__ import annotations
 
 import csv
+import json
 import math
 import re
 import shutil
@@ -29,7 +30,7 @@ from pathlib import Path
 from flexnet_fe.errors import FlexnetError
 from flexnet_fe.io import atomic_write_text
 from flexnet_fe.report.units import unit_of
-from flexnet_fe.runs import REPORT
+from flexnet_fe.runs import ENSEMBLE_STATS, ENSEMBLE_TABLE, REPORT
 
 LABEL, ERROR = "label", "error"
 """The table's fixed columns (``flexnet_fe.sweep.run_many``)."""
@@ -345,6 +346,7 @@ def build_sweep_report(table_csv: Path, parameters: list[str] | None = None) -> 
         elif label and run.is_dir():
             links[label] = f"{label}/"
     comp_header, comp_rows = _comparison(all_rows, heads)
+    ens_header, ens_rows, _ = ensemble_statistics(table_csv)
     env = Environment(loader=FileSystemLoader(Path(__file__).parent / "templates"),
                       autoescape=select_autoescape(["html", "j2"]), undefined=StrictUndefined,
                       trim_blocks=True, lstrip_blocks=True)
@@ -352,10 +354,37 @@ def build_sweep_report(table_csv: Path, parameters: list[str] | None = None) -> 
         table=table_csv.name, columns=columns, rows=rows, error_col=ERROR, label_col=LABEL,
         params=params, fixed=fixed, failed=failed, links=links, plots=plots,
         plotted=[(c.name, t) for c, t in plotted] if params else [],
-        comp_header=comp_header, comp_rows=comp_rows, fmt=_fmt_cell)
+        comp_header=comp_header, comp_rows=comp_rows, ens_header=ens_header, ens_rows=ens_rows, fmt=_fmt_cell)
     out = table_csv.with_name(f"{table_csv.stem}_report.html")
     atomic_write_text(out, html)
     return out
+
+
+def ensemble_statistics(table_csv: Path) -> tuple[list[str], list[list[str]], float | None]:
+    """(header, rows, tolerance) of an ensemble's statistics table from the ``ensemble.json``
+    beside its ``ensemble.csv`` (``flexnet_fe.ensemble.summarise``); ([], [], None) for any other
+    table. One row per headline and per fin (the stress it is held to): members, mean, standard
+    error (and its share of the mean), standard deviation, range, the members the tolerance needs."""
+    path = Path(table_csv).with_name(ENSEMBLE_STATS)
+    if Path(table_csv).name != ENSEMBLE_TABLE or not path.is_file():
+        return [], [], None
+    st = json.loads(path.read_text())
+    items = list(st["headlines"].items())
+    items += [(f"shell.{f}.held_to_pa", s["governing"]) for f, s in st["fins"].items()]
+    if "largest" in st:
+        items.append(("shell.largest_fin_stress_pa", st["largest"]))
+    header = ["quantity", "members", "mean", "standard error", "s.e. / mean", "standard deviation", "min", "max",
+              f"members for s.e. ≤ {100 * st['tolerance']:g} %"]
+    rows = []
+    for key, s in items:
+        u = unit_of(key)
+
+        def num(v):
+            return "" if v is None else f"{v * u.scale:.4g}"
+        rows.append([f"{key} [{u.label}]" if u.label else key, str(s["n"]), num(s["mean"]), num(s["sem"]),
+                     "" if s["sem_rel"] is None else f"{100 * s['sem_rel']:.2g} %", num(s["std"]), num(s["min"]),
+                     num(s["max"]), "" if s["members_for_tolerance"] is None else str(s["members_for_tolerance"])])
+    return header, rows, st["tolerance"]
 
 
 def _fmt_cell(text: str) -> str:

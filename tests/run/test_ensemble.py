@@ -108,6 +108,14 @@ def test_run_writes_table_statistics_and_picture(tmp_path, monkeypatch):
         assert [r["label"] for r in csv.DictReader(f)] == [r["label"] for r in rows]
     assert (tmp_path / ENSEMBLE_TABLE).with_suffix(".png").stat().st_size > 10_000
     assert "rudder_3 (held to): 317.5 ± " in E.describe(stats)
+    # `flexnet report FOLDER` finds the member table and shows the ensemble's own picture
+    from flexnet_fe.cli import main
+
+    assert main(["report", str(tmp_path)]) == 0
+    html = (tmp_path / "ensemble_report.html").read_text()
+    assert "ensemble.png" in html and "member_05" in html
+    # its statistics table: rudder_3 held to 340 − 9k MPa, k = 0…5 → mean 317.5 MPa
+    assert "Ensemble statistics" in html and "shell.rudder_3.held_to_pa [MPa]" in html and ">317.5<" in html
 
 
 def test_refusals_name_the_field(tmp_path):
