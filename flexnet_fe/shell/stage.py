@@ -194,7 +194,8 @@ def load_sampling_warning(contacts: FinContacts) -> str:
             f"(radar_traction's rudders 2 and 3: 173 and 372 MPa at 10 GPa, 684 and 758 MPa at 100 GPa) — and the "
             f"rope's discretisation and the aim (radar_traction, rope pieces 0.7 / 1.4 / 2.8 mm and the aim point moved "
             f"0.5–1 mm: rudder peaks ±20–27 %, their strike envelopes (shell.strike_envelope) ±8–20 %; "
-            f"docs/validation.md, \"Where the rope strikes\")")
+            f"docs/validation.md, \"Where the rope strikes\"); a defined number is a statistic over where the "
+            f"missile meets the net: `flexnet ensemble` (docs/validation.md, \"Ensembles\")")
 
 
 def fin_load_history(model: ShellModel, contacts: FinContacts, fin_index: int,
