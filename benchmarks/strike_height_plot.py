@@ -23,7 +23,8 @@ def main() -> None:
     runs = json.loads((DOCS / "data" / "strike_envelope_runs.json").read_text())
     fins = sorted({r["fin"] for r in rows})
     fig, axes = plt.subplots(1, len(fins), figsize=(5.2 * len(fins), 4.0), sharey=True)
-    marks = {"1.4": "o", "0.7": "s", "2.8": "^"}
+    marks = {"1.4": "o", "0.7": "s", "2.8": "^", "0.35": "D"}
+    colours = {"1.4": "C0", "0.7": "C1", "2.8": "C2", "0.35": "C3"}
     for ax, fin in zip(axes, fins):
         mine = sorted((r for r in rows if r["fin"] == fin), key=lambda r: r["offset_m"])
         ax.plot([1e3 * r["lowest_point_height_m"] for r in mine], [r["peak_von_mises_pa"] / 1e6 for r in mine],
@@ -33,11 +34,10 @@ def main() -> None:
             if not f:
                 continue
             ax.plot(f["strike_height_mm"], f["peak_mpa"], marks[run["pieces_mm"]], ms=7, mfc="none",
-                    color="C0" if run["pieces_mm"] == "1.4" else ("C1" if run["pieces_mm"] == "0.7" else "C2"),
+                    color=colours[run["pieces_mm"]],
                     label=f"a run's own strike, pieces {run['pieces_mm']} mm")
             if f.get("envelope_mpa"):
-                ax.axhline(f["envelope_mpa"], color="C0" if run["pieces_mm"] == "1.4" else
-                           ("C1" if run["pieces_mm"] == "0.7" else "C2"), lw=0.6, ls=":")
+                ax.axhline(f["envelope_mpa"], color=colours[run["pieces_mm"]], lw=0.6, ls=":")
         ax.set_title(f"radar × traction, {fin}")
         ax.set_xlabel("height of the strike's lowest contact point above the root [mm]")
         ax.grid(alpha=0.3)
