@@ -7,7 +7,8 @@ move of the aim point moves a rudder peak by up to 11 %, the peaks spread ±20�
 while the impulses agree within 1 %). No guidance places a missile to a millimetre within a 5 cm
 net cell, so the number a structural engineer can use is a statistic over that placement: its
 mean with the mean's standard error (which falls as 1/√n, so the statistic converges in the
-number of members), its spread and its extremes.
+number of members), its spread and its extremes, and the share of members in which a fin exceeds
+its allowable or the missile still hits, with its 95 % interval.
 
 What. ``n`` members of one case, identical but for ``collide.aim_point``: member 0 is the case as
 given; member k is moved by the k-th point of the R2 low-discrepancy sequence (Roberts 2018:
@@ -48,6 +49,12 @@ AIM_X, AIM_Y = "aim_x_m", "aim_y_m"
 HEADLINES = ("collide.dv_over_v", "collide.peak_accel_mps2", "collide.contact_duration_s",
              "flight.miss_distance_m")
 """whole-case headlines summarised when the members' summaries have them"""
+
+OUTCOMES = ("flight.hit", "collide.passed_through")
+"""yes/no headlines summarised as the share of members where they hold (:func:`proportion`)"""
+
+Z95 = 1.959963984540054
+"""the standard normal's two-sided 95 % quantile"""
 
 LARGEST = "shell.largest_governing_pa"
 """the case's largest fin stress [Pa]: over the fins, each one's strike envelope where computed, else its peak"""
@@ -97,6 +104,41 @@ def statistics(values, tolerance: float) -> dict[str, Any]:
     return out
 
 
+def proportion(k: int, n: int) -> dict[str, Any]:
+    """A share of members, k of n, with its Wilson score 95 % interval (Wilson 1927; it stays in
+    [0, 1] and is not empty at k = 0 or n, unlike the normal approximation):
+    centre (p + z²/2n) / (1 + z²/n), half-width z √(p(1 − p)/n + z²/4n²) / (1 + z²/n)."""
+    if n == 0:
+        return {"k": 0, "n": 0, "share": None, "wilson95": None}
+    p, z2 = k / n, Z95 ** 2
+    centre = (p + z2 / (2 * n)) / (1 + z2 / n)
+    half = Z95 * math.sqrt(p * (1 - p) / n + z2 / (4 * n * n)) / (1 + z2 / n)
+    return {"k": k, "n": n, "share": p, "wilson95": [max(0.0, centre - half), min(1.0, centre + half)]}
+
+
+def _yes(v) -> bool | None:
+    """A yes/no cell (a bool, or its CSV text) → bool; None when empty."""
+    if v in (None, ""):
+        return None
+    return v is True or str(v).strip().lower() in ("true", "1", "1.0")
+
+
+def _exceed(rows: list[dict], fins: list[str]) -> dict[str, Any]:
+    """Per fin (and ``any``), the share of members whose stress held to exceeds the fin's allowable
+    (``shell.<fin>.allowable_pa``); fins without an allowable left out."""
+    out, hits = {}, [False] * len(rows)
+    for f in fins:
+        pairs = [(governing(r, f), r.get(f"shell.{f}.allowable_pa")) for r in rows]
+        over = [float(g) > float(a) if g not in (None, "") and a not in (None, "") else None for g, a in pairs]
+        if all(o is None for o in over):
+            continue
+        out[f] = proportion(sum(bool(o) for o in over), sum(o is not None for o in over))
+        hits = [h or bool(o) for h, o in zip(hits, over)]
+    if out:
+        out["any"] = proportion(sum(hits), len(rows))
+    return out
+
+
 def fin_names(rows: list[dict]) -> list[str]:
     """The fins with a peak in any member row (flattened ``shell.<fin>.peak_von_mises_pa``), in order."""
     names: dict[str, None] = {}
@@ -116,8 +158,10 @@ def governing(row: dict, fin: str) -> float | None:
 
 def summarise(rows: list[dict], tolerance: float) -> dict[str, Any]:
     """The ensemble's statistics from its member rows (failed members left out and counted):
-    ``headlines`` (key → :func:`statistics`), ``fins`` (fin → {"peak": …, "governing": …}) and
-    ``largest`` (:data:`LARGEST`), with ``members``, ``failed`` and ``tolerance``."""
+    ``headlines`` (key → :func:`statistics`), ``fins`` (fin → {"peak": …, "governing": …}),
+    ``largest`` (:data:`LARGEST`), ``outcomes`` (:data:`OUTCOMES` → :func:`proportion`) and
+    ``over_allowable`` (fin, and ``any``, → the share of members above the fin's allowable), with
+    ``members``, ``failed`` and ``tolerance``. Values may be numbers or their CSV text."""
     ok = [r for r in rows if not r.get(ERROR)]
 
     def stat(vals):
@@ -128,8 +172,12 @@ def summarise(rows: list[dict], tolerance: float) -> dict[str, Any]:
            "headlines": {k: stat(r.get(k) for r in ok) for k in HEADLINES if any(k in r for r in ok)},
            "fins": {f: {"peak": stat(r.get(f"shell.{f}.{FIN_PEAK}") for r in ok),
                         "governing": stat(governing(r, f) for r in ok)} for f in fins}}
+    out["outcomes"] = {k: proportion(sum(_yes(r.get(k)) is True for r in ok), sum(_yes(r.get(k)) is not None
+                                                                                 for r in ok))
+                       for k in OUTCOMES if any(_yes(r.get(k)) is not None for r in ok)}
     if fins:
-        out["largest"] = stat(max((governing(r, f) or 0.0) for f in fins) for r in ok)
+        out["largest"] = stat(max(float(governing(r, f) or 0.0) for f in fins) for r in ok)
+        out["over_allowable"] = _exceed(ok, fins)
     return out
 
 
@@ -146,8 +194,9 @@ def plot(rows: list[dict], stats: dict, path: Path) -> Path:
     fig, ax = plt.subplots(figsize=(1.1 * len(fins) + 3.0, 4.6))
     for i, fin in enumerate(fins):
         s = stats["largest"] if fin == "largest" else stats["fins"][fin]["governing"]
-        vals = [(max((governing(r, f) or 0.0) for f in stats["fins"]) if fin == "largest" else governing(r, fin))
-                for r in ok]
+        vals = [(max(float(governing(r, f) or 0.0) for f in stats["fins"]) if fin == "largest"
+                 else governing(r, fin)) for r in ok]
+        vals = [float(v) for v in vals if v not in (None, "")]
         xs = i + np.linspace(-0.18, 0.18, max(len(vals), 1))[: len(vals)]
         ax.plot(xs, [1e-6 * float(v) for v in vals], "o", color="C0", ms=4, alpha=0.8)
         if vals:
@@ -205,4 +254,9 @@ def describe(stats: dict) -> str:
     out += [line(f"{f} (held to)", s["governing"], 1e-6, " MPa") for f, s in stats["fins"].items()]
     if "largest" in stats:
         out.append(line("largest fin stress", stats["largest"], 1e-6, " MPa"))
+    shares = [(k, p) for k, p in stats.get("outcomes", {}).items()]
+    shares += [(f"{f} above its allowable" if f != "any" else "any fin above its allowable", p)
+               for f, p in stats.get("over_allowable", {}).items()]
+    out += [f"  {name}: {p['k']}/{p['n']} members (95 % interval {100 * p['wilson95'][0]:.0f}–"
+            f"{100 * p['wilson95'][1]:.0f} %)" for name, p in shares if p["n"]]
     return "\n".join(out)

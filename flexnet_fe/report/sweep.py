@@ -346,7 +346,7 @@ def build_sweep_report(table_csv: Path, parameters: list[str] | None = None) -> 
         elif label and run.is_dir():
             links[label] = f"{label}/"
     comp_header, comp_rows = _comparison(all_rows, heads)
-    ens_header, ens_rows, _ = ensemble_statistics(table_csv)
+    ens_header, ens_rows, ens_shares = ensemble_statistics(table_csv)
     env = Environment(loader=FileSystemLoader(Path(__file__).parent / "templates"),
                       autoescape=select_autoescape(["html", "j2"]), undefined=StrictUndefined,
                       trim_blocks=True, lstrip_blocks=True)
@@ -354,20 +354,23 @@ def build_sweep_report(table_csv: Path, parameters: list[str] | None = None) -> 
         table=table_csv.name, columns=columns, rows=rows, error_col=ERROR, label_col=LABEL,
         params=params, fixed=fixed, failed=failed, links=links, plots=plots,
         plotted=[(c.name, t) for c, t in plotted] if params else [],
-        comp_header=comp_header, comp_rows=comp_rows, ens_header=ens_header, ens_rows=ens_rows, fmt=_fmt_cell)
+        comp_header=comp_header, comp_rows=comp_rows, ens_header=ens_header, ens_rows=ens_rows,
+        ens_shares=ens_shares, fmt=_fmt_cell)
     out = table_csv.with_name(f"{table_csv.stem}_report.html")
     atomic_write_text(out, html)
     return out
 
 
-def ensemble_statistics(table_csv: Path) -> tuple[list[str], list[list[str]], float | None]:
-    """(header, rows, tolerance) of an ensemble's statistics table from the ``ensemble.json``
-    beside its ``ensemble.csv`` (``flexnet_fe.ensemble.summarise``); ([], [], None) for any other
-    table. One row per headline and per fin (the stress it is held to): members, mean, standard
-    error (and its share of the mean), standard deviation, range, the members the tolerance needs."""
+def ensemble_statistics(table_csv: Path) -> tuple[list[str], list[list[str]], list[list[str]]]:
+    """(header, rows, shares) of an ensemble's statistics from the ``ensemble.json`` beside its
+    ``ensemble.csv`` (``flexnet_fe.ensemble.summarise``); ([], [], []) for any other table. One row
+    per headline and per fin (the stress it is held to): members, mean, standard error (and its
+    share of the mean), standard deviation, range, the members the tolerance needs; ``shares``:
+    (what, members, share, Wilson 95 % interval) for the yes/no outcomes and each fin above its
+    allowable."""
     path = Path(table_csv).with_name(ENSEMBLE_STATS)
     if Path(table_csv).name != ENSEMBLE_TABLE or not path.is_file():
-        return [], [], None
+        return [], [], []
     st = json.loads(path.read_text())
     items = list(st["headlines"].items())
     items += [(f"shell.{f}.held_to_pa", s["governing"]) for f, s in st["fins"].items()]
@@ -384,7 +387,12 @@ def ensemble_statistics(table_csv: Path) -> tuple[list[str], list[list[str]], fl
         rows.append([f"{key} [{u.label}]" if u.label else key, str(s["n"]), num(s["mean"]), num(s["sem"]),
                      "" if s["sem_rel"] is None else f"{100 * s['sem_rel']:.2g} %", num(s["std"]), num(s["min"]),
                      num(s["max"]), "" if s["members_for_tolerance"] is None else str(s["members_for_tolerance"])])
-    return header, rows, st["tolerance"]
+    named = list(st.get("outcomes", {}).items())
+    named += [(f"{f} above its allowable" if f != "any" else "any fin above its allowable", p)
+              for f, p in st.get("over_allowable", {}).items()]
+    shares = [[name, f"{p['k']} of {p['n']}", f"{100 * p['share']:.0f} %",
+               f"{100 * p['wilson95'][0]:.0f}–{100 * p['wilson95'][1]:.0f} %"] for name, p in named if p["n"]]
+    return header, rows, shares
 
 
 def _fmt_cell(text: str) -> str:

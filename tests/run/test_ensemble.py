@@ -73,6 +73,16 @@ def test_statistics_against_the_statistics_module():
     assert E.statistics([], 0.02)["n"] == 0
 
 
+def test_shares_have_the_wilson_interval():
+    # closed forms (Wilson 1927, z = 1.959964): k = 0 of n → [0, z²/(n + z²)]; k = n → [n/(n + z²), 1];
+    # k = 5 of 10 → 0.5 ± z·√(0.025 + z²/400)/(1 + z²/10) = [0.23659, 0.76341]
+    z2 = E.Z95 ** 2
+    assert E.proportion(0, 10)["wilson95"] == pytest.approx([0.0, z2 / (10 + z2)], abs=1e-15)
+    assert E.proportion(10, 10)["wilson95"] == pytest.approx([10 / (10 + z2), 1.0], abs=1e-15)
+    assert E.proportion(5, 10)["wilson95"] == pytest.approx([0.23659, 0.76341], abs=1e-5)
+    assert E.proportion(3, 12)["share"] == 0.25 and E.proportion(0, 0)["share"] is None
+
+
 def _row(label, peaks, envelope=None, error=""):
     r = {"label": label, "collide.dv_over_v": 1e-4, "error": error}
     for fin, p in peaks.items():
@@ -98,8 +108,26 @@ def test_summary_holds_each_fin_to_its_envelope_and_leaves_failed_members_out():
     assert s["headlines"]["collide.dv_over_v"]["n"] == 3
 
 
+def test_shares_above_the_allowable_and_of_hits_read_the_csv_text_too():
+    rows = [_row(f"member_{k:02d}", {"rudder_2": p, "wing_1": 80e6}, {"rudder_2": e} if e else None)
+            for k, (p, e) in enumerate([(300e6, 520e6), (450e6, None), (350e6, None), (600e6, 610e6)])]
+    for r, hit in zip(rows, (True, False, True, True)):
+        r.update({"shell.rudder_2.allowable_pa": 500e6, "shell.wing_1.allowable_pa": 500e6, "flight.hit": hit})
+    text = [{k: ("" if v is None else str(v)) for k, v in r.items()} for r in rows]  # as read back from the CSV
+    for given in (rows, text):
+        s = E.summarise(given, 0.02)
+        # rudder_2 held to 520, 450, 350, 610 MPa against 500: members 0 and 3 above; wing_1 never
+        assert (s["over_allowable"]["rudder_2"]["k"], s["over_allowable"]["rudder_2"]["n"]) == (2, 4)
+        assert s["over_allowable"]["wing_1"]["k"] == 0 and s["over_allowable"]["any"]["k"] == 2
+        assert (s["outcomes"]["flight.hit"]["k"], s["outcomes"]["flight.hit"]["n"]) == (3, 4)
+        assert s["largest"]["max"] == 610e6
+    assert "rudder_2 above its allowable: 2/4 members" in E.describe(E.summarise(rows, 0.02))
+
+
 def test_run_writes_table_statistics_and_picture(tmp_path, monkeypatch):
     rows = [_row(f"member_{k:02d}", {"wing_2": 80e6 + 5e6 * k, "rudder_3": 340e6 - 9e6 * k}) for k in range(6)]
+    for k, r in enumerate(rows):
+        r.update({"shell.rudder_3.allowable_pa": 330e6, "flight.hit": k != 2})
     monkeypatch.setattr(E, "run_many", lambda variants, out, table, **kw: (write_table(table, rows), rows)[1])
     stats = E.run_ensemble([], tmp_path, 0.02)
     back = json.loads((tmp_path / ENSEMBLE_STATS).read_text())
@@ -116,6 +144,9 @@ def test_run_writes_table_statistics_and_picture(tmp_path, monkeypatch):
     assert "ensemble.png" in html and "member_05" in html
     # its statistics table: rudder_3 held to 340 − 9k MPa, k = 0…5 → mean 317.5 MPa
     assert "Ensemble statistics" in html and "shell.rudder_3.held_to_pa [MPa]" in html and ">317.5<" in html
+    # rudder_3 above 330 MPa in members 0 and 1 (340, 331); the missile hits in 5 of 6
+    assert "<td>rudder_3 above its allowable</td><td class=\"num\">2 of 6</td>" in html
+    assert "<td>flight.hit</td><td class=\"num\">5 of 6</td>" in html
 
 
 def test_refusals_name_the_field(tmp_path):
