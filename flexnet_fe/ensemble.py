@@ -86,7 +86,8 @@ def statistics(values, tolerance: float) -> dict[str, Any]:
     """Statistics of one headline over the members that have it (``values``, shape (n,)): n, mean,
     std (sample, n − 1), sem = std/√n, sem_rel = sem/|mean|, min, max, ``members_for_tolerance``
     = ⌈(std / (tolerance |mean|))²⌉ (the members that bring sem_rel to ``tolerance``) and
-    ``converged`` = sem_rel ≤ tolerance. With n < 2 the spread is undefined (None, not converged)."""
+    ``converged`` = sem_rel ≤ tolerance. With n < 2 the spread is undefined (None, not converged);
+    with a zero mean the relative figures are None and ``converged`` means every member agrees."""
     v = np.asarray(values, float)
     n = int(v.size)
     out: dict[str, Any] = {"n": n, "mean": float(v.mean()) if n else None,
@@ -98,8 +99,11 @@ def statistics(values, tolerance: float) -> dict[str, Any]:
     std = float(v.std(ddof=1))
     sem = std / math.sqrt(n)
     mean = out["mean"]
-    rel = sem / abs(mean) if mean else (0.0 if sem == 0.0 else math.inf)
-    need = math.ceil((std / (tolerance * abs(mean))) ** 2) if mean else (n if std == 0.0 else None)
+    if mean == 0.0:  # no relative error to speak of: converged only if every member agrees
+        out.update(std=std, sem=sem, converged=std == 0.0)
+        return out
+    rel = sem / abs(mean)
+    need = math.ceil((std / (tolerance * abs(mean))) ** 2)
     out.update(std=std, sem=sem, sem_rel=rel, members_for_tolerance=need, converged=rel <= tolerance)
     return out
 
@@ -247,8 +251,10 @@ def describe(stats: dict) -> str:
     def line(name, s, scale=1.0, unit=""):
         if s["n"] < 2:
             return f"  {name}: {s['n']} member(s), no spread"
-        flag = "" if s["converged"] else f"  (> {100 * stats['tolerance']:g} %: ~{s['members_for_tolerance']} members)"
-        return (f"  {name}: {s['mean'] * scale:.4g} ± {s['sem'] * scale:.2g}{unit} (s.e. {100 * s['sem_rel']:.2g} %), "
+        flag = "" if s["converged"] or s["sem_rel"] is None else \
+            f"  (> {100 * stats['tolerance']:g} %: ~{s['members_for_tolerance']} members)"
+        rel = "" if s["sem_rel"] is None else f" (s.e. {100 * s['sem_rel']:.2g} %)"
+        return (f"  {name}: {s['mean'] * scale:.4g} ± {s['sem'] * scale:.2g}{unit}{rel}, "
                 f"range {s['min'] * scale:.4g}–{s['max'] * scale:.4g}, s.d. {s['std'] * scale:.3g}{flag}")
     out = [line(k, s) for k, s in stats["headlines"].items()]
     out += [line(f"{f} (held to)", s["governing"], 1e-6, " MPa") for f, s in stats["fins"].items()]

@@ -71,6 +71,9 @@ def test_statistics_against_the_statistics_module():
     one = E.statistics([3.0], 0.02)
     assert one["mean"] == 3.0 and one["std"] is None and one["converged"] is False
     assert E.statistics([], 0.02)["n"] == 0
+    zero = E.statistics([-1.0, 1.0], 0.02)  # a zero mean has no relative error
+    assert zero["sem_rel"] is None and zero["converged"] is False and "± 1" in E.describe(
+        {"tolerance": 0.02, "headlines": {"x": zero}, "fins": {}})
 
 
 def test_shares_have_the_wilson_interval():
