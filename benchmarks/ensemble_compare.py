@@ -61,6 +61,42 @@ def paired(a: dict, b: dict, q: str) -> str:
     return f"{100 * md / mean_a:+.1f} ± {100 * se / abs(mean_a):.1f} % ({len(common)} pairs)"
 
 
+def plot(ens: list, path: Path) -> None:
+    """Per fin: each ensemble's members (dots; the same member joined by a grey line across
+    ensembles) and its mean ± 2 standard errors (bar)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    quantities = [q for q in ens[0][1] if q.endswith("[MPa]")]
+    fig, ax = plt.subplots(figsize=(1.5 * len(quantities) + 2.0, 4.8))
+    width = 0.6 / max(len(ens) - 1, 1)
+    for i, q in enumerate(quantities):
+        xs = [i - 0.3 + j * width for j in range(len(ens))]
+        for m in ens[0][2]:
+            ys = [e[2].get(m, {}).get(q) for e in ens]
+            if all(y is not None for y in ys):
+                ax.plot(xs, [1e-6 * y for y in ys], "-", color="0.75", lw=0.6, zorder=1)
+        for j, (label, stats, members) in enumerate(ens):
+            ys = [1e-6 * v[q] for v in members.values() if q in v]
+            ax.plot([xs[j]] * len(ys), ys, "o", color=f"C{j}", ms=3.5, alpha=0.8, zorder=2,
+                    label=f"{label}: members" if i == 0 else None)
+            s = stats.get(q)
+            if s and s["sem"] is not None:
+                ax.errorbar([xs[j] + 0.06], [1e-6 * s["mean"]], yerr=[2e-6 * s["sem"]], fmt="s", color=f"C{j}",
+                            capsize=4, ms=6, zorder=3, label=f"{label}: mean ± 2 s.e." if i == 0 else None)
+    ax.set_xticks(range(len(quantities)), [q.replace(" [MPa]", "") for q in quantities], rotation=30, ha="right")
+    ax.set_ylabel("von Mises held to [MPa]")
+    ax.grid(True, axis="y", alpha=0.4)
+    ax.legend(fontsize=8, ncol=2)
+    ax.set_title("radar × traction: ensembles over one net cell at two rope resolutions "
+                 "(grey: the same aim point)", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    print(path)
+
+
 def main(argv: list[str]) -> None:
     ens = []
     for arg in argv:
@@ -93,6 +129,7 @@ def main(argv: list[str]) -> None:
             cells.append(f"{100 * d / r['mean']:+.1f} % ({d / se:+.1f})" if se > 0 else f"{d * scale:+.3g}")
             cells.append(paired(ref_members, members, q))
         print(f"| {q} | " + " | ".join(cells) + " |")
+    plot(ens, DOCS / "img" / "ensemble_pieces.png")
 
 
 if __name__ == "__main__":
