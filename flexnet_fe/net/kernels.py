@@ -29,7 +29,13 @@ from flexnet_fe.net.hub import hub_link_state
 
 C_MAX = CD_FRICTION + C_CROSS
 CHUNK = 256
-"""Segments of a run evaluated per pass: the pass's scratch (12 × 256 floats) stays in L1."""
+"""Segments of a run evaluated per pass (and about the knots of a grid tile, :func:`_grid_shape`):
+the pass's scratch (12 rows of 256 floats in use) stays in L1."""
+TILE = 2048
+"""Knots per tile of a grid net (:func:`_grid_shape`), about."""
+ROWLEN = TILE + CHUNK + 8
+"""Entries per row of the scratch (13 ROWLEN,): a grid tile's (B + 1) W <= TILE + CHUNK; + 8,
+one cache line, so that the rows do not start at multiples of 4 KiB (the same L1 sets)."""
 MIN_RUN = 16
 """Shortest run taken by the vector path; shorter ones join the per-segment loop."""
 
@@ -187,12 +193,13 @@ def _block_forces(model, state, f, lam, fa, k0, k1):
 
 
 @njit(cache=True, fastmath={"reassoc", "nsz"})
-def _sum(buf, row, c):
-    """Σ of the first c entries of row ``row`` of the run scratch (:func:`_run_law`), reassociated
-    (vector partial sums: order-dependent round-off)."""
+def _sum(buf, start, c):
+    """Σ buf[start … start + c − 1] (a row of the run scratch, :func:`_run_law`; start uint64: an
+    unsigned index, else the wrap-around test keeps the loop scalar), reassociated (vector partial
+    sums: order-dependent round-off)."""
     total = 0.0
     for r in range(c):
-        total += buf[row * CHUNK + r]
+        total += buf[start + np.uint64(r)]
     return total
 
 
@@ -218,8 +225,8 @@ def _scatter(f, buf, rows, sign, chunk):
     s = np.int64(s_u)
     for q in range(nq):
         iq = i0 + np.uint64(q * stride)
-        gi = np.uint64(rows[0] * CHUNK + q * c)
-        gj = np.uint64(rows[1] * CHUNK + q * c)
+        gi = np.uint64(rows[0] * ROWLEN + q * c)
+        gj = np.uint64(rows[1] * ROWLEN + q * c)
         for r in range(min(s, c)):  # only end i
             f[iq + np.uint64(r)] += buf[gi + np.uint64(r)]
         for r in range(s, c):  # end j, then end i
@@ -232,15 +239,23 @@ def _scatter(f, buf, rows, sign, chunk):
 @njit(cache=True, inline="always")
 def _law(xs, vs, law, i, j, e):
     """``forces.spring_force`` of segment e joining nodes i, j: xs, vs 3 rows (n,) each of
-    positions [m] and velocities [m/s]; law = (rest, stiffness, damping, offset) (m,)."""
+    positions [m] and velocities [m/s]; law = (taut length l0 − offset [m], stiffness, damping)
+    (m,) (:func:`_law_arrays`; its offset 0 gives the same stretch to the bit)."""
     x0, x1, x2 = xs
     v0, v1, v2 = vs
-    rest, stiffness, damping, offset = law
+    taut, stiffness, damping = law
     return spring_force((x0[j] - x0[i], x1[j] - x1[i], x2[j] - x2[i]), (v0[j] - v0[i], v1[j] - v1[i], v2[j] - v2[i]),
-                        0.0, (rest[e], stiffness[e], damping[e], offset[e]))
+                        0.0, (taut[e], stiffness[e], damping[e], 0.0))
 
 
-ROW = tuple(np.uint64(k * CHUNK) for k in range(12))
+@njit(cache=True)
+def _law_arrays(model):
+    """(taut length l0 − offset [m], stiffness [N/m], damping [N s/m]), each (m,): the rope law's
+    data as the run loops read it (one array less than rest and offset)."""
+    return model.rest - model.offset, model.stiffness, model.damping
+
+
+ROW = tuple(np.uint64(k * ROWLEN) for k in range(13))
 """Offsets of the rows of the run scratch (12 CHUNK,): unsigned, as every index of the run
 loops (numba tests a signed index for wrap-around, which keeps LLVM from vectorising), and
 constant, so LLVM checks the aliasing of the scratch once, not row by row."""
@@ -260,18 +275,21 @@ def _run_law(xs, vs, law, chunk, tension, out, geometry=None):
     has no geometry stores. Measured side by side against the former two copies (2026-11-28,
     ``benchmarks/net_kernel_ab.py``, thread CPU time): the same speed within the noise, air off and
     on, and the same trajectories to the bit; carrying the stores in the air-free path costs it 9–14 %."""
-    (i0, s, k), (nq, c, stride, length) = chunk
+    (i0, s, k, base), (nq, c, stride, length, ostride) = chunk
     stiffness = law[1]
     for q in range(nq):
         iq = i0 + np.uint64(q * stride)
         kq = k + np.uint64(q * length)
-        oq = np.uint64(q * c)
+        oq = base + np.uint64(q * ostride)
         for r in range(c):
             rr = np.uint64(r)
             e = kq + rr
             o = oq + rr
             t, u0, u1, u2, lf, ldot, stretch = _law(xs, vs, law, iq + rr, iq + rr + s, e)
-            tension[e] = t
+            if tension is None:
+                out[ROW[12] + o] = t
+            else:
+                tension[e] = t
             out[o] = t * u0
             out[ROW[1] + o] = t * u1
             out[ROW[2] + o] = t * u2
@@ -294,11 +312,11 @@ def _run_air(vs, air, chunk, out):
     run-time alias checks LLVM accepts, and stays scalar.)"""
     v0, v1, v2 = vs
     diameter, rho, wind = air
-    (i0, s, k), (nq, c, stride, length) = chunk
+    (i0, s, k, base), (nq, c, stride, length, ostride) = chunk
     for q in range(nq):
         iq = i0 + np.uint64(q * stride)
         kq = k + np.uint64(q * length)
-        oq = np.uint64(q * c)
+        oq = base + np.uint64(q * ostride)
         for r in range(c):
             rr = np.uint64(r)
             i = iq + rr
@@ -328,7 +346,7 @@ def _run_air(vs, air, chunk, out):
 
 
 @njit(cache=True, error_model="numpy")
-def _run_forces(model, rows, fs, lam, fas, run, buf):
+def _run_forces(model, rows, law, fs, lam, fas, run, buf):
     """Adds the tensions and, with air, the aerodynamics of a run (``run`` = (k0, nrows, length,
     a0, stride, s), :func:`spring_blocks`) to fs (3, n) [N] (and the air's to fas (3, n) [N],
     its drag bound to lam (n,) [kg/s]); writes their tension into rows[2] (m,) [N]. rows = (3
@@ -341,7 +359,6 @@ def _run_forces(model, rows, fs, lam, fas, run, buf):
     each node in the per-segment loop's order)."""
     xs, vs, tension, bits = rows
     k0, nrows, length, a0, stride, s = run
-    law = (model.rest, model.stiffness, model.damping, model.offset)
     per = max(1, CHUNK // length)  # rows per chunk
     width = min(length, CHUNK)  # segments per row of a chunk
     tbits = 0
@@ -352,7 +369,7 @@ def _run_forces(model, rows, fs, lam, fas, run, buf):
             c = min(width, length - r0)
             i0 = np.uint64(a0 + q0 * stride + r0)
             k = np.uint64(k0 + q0 * length + r0)
-            chunk = ((i0, np.uint64(s), k), (nq, c, stride, length))
+            chunk = ((i0, np.uint64(s), k, np.uint64(0)), (nq, c, stride, length, c))
             ends = ((i0, np.uint64(s)), (nq, c, stride))
             if model.air:
                 _run_law(xs, vs, law, chunk, tension, buf, True)
@@ -366,7 +383,7 @@ def _run_forces(model, rows, fs, lam, fas, run, buf):
                 for comp in range(3):
                     _scatter(fs[comp], buf, (comp, comp), -1.0, ends)
             tbits = _max_bits(bits, k, nq * c, tbits)  # whole rows or one row: contiguous
-            p_diss += _sum(buf, 3, nq * c)
+            p_diss += _sum(buf, ROW[3], nq * c)
     return tbits, p_diss
 
 
@@ -409,7 +426,7 @@ def _hub_link_forces(model, state, f, lam, fa):
 
 
 @njit(cache=True)
-def _segment_forces(model, view, fs, lam, fas, buf):
+def _segment_forces(model, view, law, fs, lam, fas, buf):
     """Adds the forces of every segment that is not a hub link (runs by :func:`_run_forces`,
     the rest by :func:`_block_forces`, in the order of ``model.blocks``) to fs (3, n) [N], their
     air loads to fas (3, n) [N] and drag bounds to lam (n,) [kg/s]; writes their tension.
@@ -424,7 +441,7 @@ def _segment_forces(model, view, fs, lam, fas, buf):
     for b in range(model.blocks.shape[0]):
         blk = model.blocks[b]
         if blk[5] > 0:
-            tb, p = _run_forces(model, rows, fs, lam, fas, (blk[0], blk[1], blk[2], blk[3], blk[4], blk[5]), buf)
+            tb, p = _run_forces(model, rows, law, fs, lam, fas, (blk[0], blk[1], blk[2], blk[3], blk[4], blk[5]), buf)
             tbits = max(tbits, tb)
         else:
             t, p = _block_forces(model, view, fs.T, lam, fas.T, blk[0], blk[0] + blk[1] * blk[2])
@@ -473,7 +490,7 @@ def net_forces(model, state, f, lam):
     fs = np.empty(xs.shape)
     fas = np.zeros(xs.shape)
     _weights(model, fs)
-    tmax, _ = _segment_forces(model, view, fs, lam, fas, np.empty(12 * CHUNK))
+    tmax, _ = _segment_forces(model, view, _law_arrays(model), fs, lam, fas, np.empty(12 * ROWLEN))
     torque, tlink, _ = _hub_link_forces(model, view, fs.T, lam, fas.T)
     f[:, :] = fs.T
     return torque, max(tmax, tlink)
@@ -524,6 +541,266 @@ def _update(xs, vs, fs, rate, mass, gravity, dt):
             f[i] = mass[i] * g
 
 
+@njit(cache=True)
+def _grid_shape(model):
+    """(W, B): W when the segments are a W × H grid of knots in the traction net's two blocks (all
+    horizontal bars as H rows of W − 1, s = 1, then all vertical bars as one layer, s = W), no
+    hub, and W <= CHUNK; B = max(1, TILE // W) knot rows per tile of :func:`_grid_step`. (0, 0)
+    for any other net."""
+    b = model.blocks
+    if model.hub >= 0 or b.shape[0] != 2 or b[0, 5] != 1 or b[1, 1] != 1 or b[1, 4] != 0:
+        return 0, 0
+    w, h = b[0, 4], b[0, 1]
+    if w > CHUNK or w < 2 or b[0, 0] != 0 or b[0, 2] != w - 1 or b[0, 3] != 0:
+        return 0, 0
+    if b[1, 0] != h * (w - 1) or b[1, 2] != (h - 1) * w or b[1, 3] != 0 or b[1, 5] != w:
+        return 0, 0
+    return w, max(1, TILE // w)
+
+
+@njit(cache=True)
+def _grid_law(model, law, w):
+    """The horizontal bars' data (law arrays as :func:`_law_arrays`', diameter) indexed by their
+    end-i knot, (n,) each: bar c of knot row q at q W + c; at q W + W − 1 (no bar) taut length
+    +inf, stiffness, damping and diameter 0 (slack, no air load: T = 0, a = 0). With them the
+    bars of a tile are one loop over its knots."""
+    taut, stiffness, damping = law
+    n = model.mass.shape[0]
+    out = (np.empty(n), np.empty(n), np.empty(n), np.empty(n))
+    for knot in range(n):
+        row, c = divmod(knot, w)
+        real = c < w - 1
+        e = knot - row
+        out[0][knot] = taut[e] if real else np.inf
+        out[1][knot] = stiffness[e] if real else 0.0
+        out[2][knot] = damping[e] if real else 0.0
+        out[3][knot] = model.diameter[e] if real else 0.0
+    return out
+
+
+@njit(cache=True)
+def _fill(buf, rows, span, value):
+    """buf[ROW[r] + i] = value for r < rows, span = (start, stop) (i in start … stop − 1)."""
+    for r in range(rows):
+        for i in range(span[0], span[1]):
+            buf[ROW[r] + np.uint64(i)] = value
+
+
+@njit(cache=True)
+def _shift_down(buf, rows, start, w):
+    """buf[ROW[r] + i] = buf[ROW[r] + start + i], i < w, r < rows: a tile's last row of vertical
+    bars becomes the next tile's row below."""
+    for r in range(rows):
+        for i in range(w):
+            buf[ROW[r] + np.uint64(i)] = buf[ROW[r] + np.uint64(start + i)]
+
+
+@njit(cache=True)
+def _grid_pads(hb, w, nr, air):
+    """The entries q W (q <= nr) of hb, where no bar is (a row's end: the padded bar of
+    :func:`_grid_law`). Air off, rows 0–3 and 12 +0.0: a knot at a row's start reads it as its
+    missing end j (f + −1 × +0.0 = f), one at a row's end as its missing end i (f + +0.0 = f,
+    but for f = −0.0, which needs a −0.0 weight component). With air, the rows added at both
+    ends (0–2, 5–11) −0.0 (x + −0.0 = x, always). Rows 3 and 12 (+0.0) enter the tile's
+    dissipation sum and largest tension."""
+    for q in range(nr + 1):
+        _fill(hb, 12 if air else 4, (q * w, q * w + 1), -0.0 if air else 0.0)
+        hb[ROW[3] + np.uint64(q * w)] = 0.0
+        hb[ROW[12] + np.uint64(q * w)] = 0.0
+
+
+@njit(cache=True, error_model="numpy")
+def _grid_tile_law(rows, laws, hb, vb, tile):
+    """The rope law (:func:`_run_law`, with air :func:`_run_air`) of a tile's bars (tile = ((a,
+    kv) uint64, (nr, nv, W), air): knots a … a + nr W − 1, nv rows of them with bars up, the
+    first at kv): the horizontal ones into hb (the bar from knot a + l at 1 + l: that knot reads
+    its end-i force at l + 1, the next its end-j force there), the vertical ones into vb from W
+    (knot a + l's end i at W + l). Returns (largest tension's bit pattern, dissipation rate [W])."""
+    (a, kv), (nr, nv, w), air = tile
+    xs, vs, tension, bits = rows
+    law, hlaw, aero = laws
+    wu, one = np.uint64(w), np.uint64(1)
+    hl = (hlaw[0], hlaw[1], hlaw[2])
+    chunk = ((a, one, a, one), (1, nr * w - 1, 0, nr * w - 1, 0))
+    if air:
+        _run_law(xs, vs, hl, chunk, None, hb, True)
+        _run_air(vs, (hlaw[3], aero[1], aero[2]), chunk, hb)
+    else:
+        _run_law(xs, vs, hl, chunk, None, hb)
+    _grid_pads(hb, w, nr, air)
+    tbits = _max_bits(hb.view(np.int64), ROW[12], nr * w, 0)
+    p_diss = _sum(hb, ROW[3], nr * w)
+    if nv > 0:
+        chunk = ((a, wu, kv, wu), (1, nv * w, 0, nv * w, 0))
+        if air:
+            _run_law(xs, vs, law, chunk, None, vb, True)
+            _run_air(vs, aero, chunk, vb)
+        else:
+            _run_law(xs, vs, law, chunk, None, vb)
+        tbits = _max_bits(vb.view(np.int64), ROW[12] + wu, nv * w, tbits)
+        p_diss += _sum(vb, ROW[3] + wu, nv * w)
+    return tbits, p_diss
+
+
+@njit(cache=True)
+def _grid_tensions(tension, hb, vb, tile):
+    """Copies the tensions [N] of a grid tile's bars from row 12 of hb and vb (as
+    :func:`_grid_tile_law` fills them) into tension (m,): tile = ((k, kv) uint64, (nr, nv, W)),
+    its first horizontal and vertical bar, its knot rows, how many of them have bars up."""
+    (k, kv), (nr, nv, w) = tile
+    for q in range(nr):
+        for c in range(w - 1):
+            tension[k + np.uint64(q * (w - 1) + c)] = hb[ROW[12] + np.uint64(1 + q * w + c)]
+    for lv in range(nv * w):
+        tension[kv + np.uint64(lv)] = vb[ROW[12] + np.uint64(w + lv)]
+
+
+@njit(cache=True, error_model="numpy")
+def _grid_update(xs, vs, mg, rate, hb, vb, tile, dt):
+    """Air off: the forces on the knots a … a + n − 1 of a grid tile (tile = (a, n, W) uint64) in
+    the per-segment loop's order — the weight m g, end j then end i of the horizontal bars (knot
+    a + l at l, l + 1 of hb's rows 0–2), end j of the vertical bars from the row below (vb at l),
+    end i of those to the row above (vb at W + l) — then symplectic Euler on them: v += a f,
+    x += dt v. xs, vs (3, n) [m], [m/s]; mg = (mass (n,) [kg], gravity (3,) [m/s²]); rate (n,)
+    a = dt / m [s/kg]."""
+    a, n, w = tile
+    mass, gravity = mg
+    one = np.uint64(1)
+    for comp in range(3):
+        o = ROW[comp]
+        g = gravity[comp]
+        for l in range(n):
+            lu = np.uint64(l)
+            node = a + lu
+            f = (mass[node] * g + -1.0 * hb[o + lu]) + hb[o + lu + one]
+            f = (f + -1.0 * vb[o + lu]) + vb[o + w + lu]
+            vn = vs[comp, node] + rate[node] * f
+            vs[comp, node] = vn
+            xs[comp, node] += dt * vn
+
+
+@njit(cache=True, error_model="numpy")
+def _grid_update_air(state, mg, rate, bufs, tile, dt):
+    """:func:`_grid_update` with air (state = (xs, vs), bufs = (hb, vb, nb)): per knot the force
+    as :func:`_run_forces` adds it (end j then end i of the rows 5–7 and 0–2 that
+    :func:`_run_air` leaves), the air's share fa (rows 8–10, from 0) into nb's rows 0–2, the
+    velocity sum 2 v + a f before the update into rows 3–5 (for the air's work, as
+    :func:`_air_work`), and its drag bound λ (row 11, from 0) times a into row 6."""
+    a, n, w = tile
+    xs, vs = state
+    hb, vb, nb = bufs
+    mass, gravity = mg
+    one = np.uint64(1)
+    for comp in range(3):
+        o, oj, oa, g = ROW[comp], ROW[5 + comp], ROW[8 + comp], gravity[comp]
+        for l in range(n):
+            lu = np.uint64(l)
+            node = a + lu
+            f = (mass[node] * g + hb[oj + lu]) + hb[o + lu + one]
+            f = (f + vb[oj + lu]) + vb[o + w + lu]
+            fa = (0.0 + hb[oa + lu]) + hb[oa + lu + one]
+            nb[ROW[comp] + lu] = (fa + vb[oa + lu]) + vb[oa + w + lu]
+            vo = vs[comp, node]
+            nb[ROW[3 + comp] + lu] = 2.0 * vo + rate[node] * f
+            vn = vo + rate[node] * f
+            vs[comp, node] = vn
+            xs[comp, node] += dt * vn
+    for l in range(n):
+        lu = np.uint64(l)
+        lam = (0.0 + hb[ROW[11] + lu]) + hb[ROW[11] + lu + one]
+        nb[ROW[6] + lu] = ((lam + vb[ROW[11] + lu]) + vb[ROW[11] + w + lu]) * rate[a + lu]
+
+
+@njit(cache=True, fastmath={"reassoc", "nsz"})
+def _dot(x, y, n):
+    """Σ x[0][x[1] + i] y[0][y[1] + i], i < n (x, y = (array, uint64 start)), reassociated."""
+    total = 0.0
+    for i in range(n):
+        iu = np.uint64(i)
+        total += x[0][x[1] + iu] * y[0][y[1] + iu]
+    return total
+
+
+@njit(cache=True, error_model="numpy")
+def _grid_air_work(nb, mass, tile, acc):
+    """Adds a tile's terms of the air's work (:func:`_air_work`: Σ fa·(2v + a f), Σ fa (3,),
+    Σ m (2v + a f) (3,)) from nb (:func:`_grid_update_air`) to acc[0], acc[1:4], acc[4:7], and its
+    largest drag number λ a to acc[7] (tile = (a, n) uint64, mass (n,) [kg])."""
+    a, n = tile
+    for comp in range(3):
+        acc[0] += _dot((nb, ROW[comp]), (nb, ROW[3 + comp]), n)
+        acc[1 + comp] += _sum(nb, ROW[comp], n)
+        acc[4 + comp] += _dot((mass, a), (nb, ROW[3 + comp]), n)
+    top = np.int64(_max_bits(nb.view(np.int64), ROW[6], n, 0)).view(np.float64)
+    acc[7] = max(acc[7], top)
+
+
+@njit(cache=True, error_model="numpy")
+def _grid_step(rows, laws, soa, bufs, grid, dt):
+    """One symplectic-Euler step of a grid net (:func:`_grid_shape`; grid = (W, H, B, last step?,
+    air)), tile by tile of B knot rows: the laws of their bars (:func:`_grid_tile_law`; vb's first
+    W entries hold the row below's bars, none below the first row, −0.0 above the last), then the
+    tile's forces and update (:func:`_grid_update`, :func:`_grid_update_air` and
+    :func:`_grid_air_work`); the last step copies the tensions out. rows, laws as
+    :func:`_grid_tile_law`'s; soa = (xs, vs (3, n), (mass, gravity), rate (n,)); bufs = (hb, vb,
+    nb, acc (8,), zeroed by the caller). Returns (largest tension [N], dissipation rate [W])."""
+    w, h, b, last, air = grid
+    xs2, vs2, mg, rate = soa
+    hb, vb, nb, acc = bufs
+    nrow = 12 if air else 3
+    _fill(vb, nrow, (0, w), -0.0 if air else 0.0)
+    tbits = 0
+    p_diss = 0.0
+    for r0 in range(0, h, b):
+        nr = min(b, h - r0)
+        nv = min(nr, h - 1 - r0)
+        a = np.uint64(r0 * w)
+        kv = np.uint64(h * (w - 1)) + a
+        tb, p = _grid_tile_law(rows, laws, hb, vb, ((a, kv), (nr, nv, w), air))
+        tbits = max(tbits, tb)
+        p_diss += p
+        if nv < nr:
+            _fill(vb, nrow, (nr * w, nr * w + w), -0.0)
+        if last:
+            _grid_tensions(rows[2], hb, vb, ((np.uint64(r0 * (w - 1)), kv), (nr, nv, w)))
+        tile = (a, np.uint64(nr * w), np.uint64(w))
+        if air:
+            _grid_update_air((xs2, vs2), mg, rate, (hb, vb, nb), tile, dt)
+            _grid_air_work(nb, mg[0], (a, nr * w), acc)
+        else:
+            _grid_update(xs2, vs2, mg, rate, hb, vb, tile, dt)
+        _shift_down(vb, nrow, nr * w, w)
+    return np.int64(tbits).view(np.float64), p_diss
+
+
+@njit(cache=True, error_model="numpy")
+def _advance_grid(model, state, n_steps, dt):
+    """:func:`advance` for a grid net (:func:`_grid_shape`): :func:`_grid_step`."""
+    mass = model.mass
+    w, b = _grid_shape(model)
+    xs, vs, view = _soa_view(state)
+    rate = dt / mass
+    rows = ((xs[0], xs[1], xs[2]), (vs[0], vs[1], vs[2]), view.tension, view.tension.view(np.int64))
+    law = _law_arrays(model)
+    laws = (law, _grid_law(model, law, w), (model.diameter, model.rho, model.wind))
+    soa = (xs, vs, (mass, model.gravity), rate)
+    bufs = (np.empty(13 * ROWLEN), np.empty(13 * ROWLEN), np.empty(7 * ROWLEN), np.zeros(8))
+    inv_m = 1.0 / mass.sum()
+    peak = 0.0
+    for step in range(n_steps):
+        grid = (w, mass.shape[0] // w, b, step + 1 == n_steps, model.air)
+        tmax, p_diss = _grid_step(rows, laws, soa, bufs, grid, dt)
+        peak = max(peak, tmax)
+        state.losses[0] += dt * p_diss
+        if model.air:
+            acc = bufs[3]
+            state.losses[1] += 0.5 * dt * (acc[0] - inv_m * (acc[1] * acc[4] + acc[2] * acc[5] + acc[3] * acc[6]))
+            acc[:7] = 0.0
+    state.x[:, :] = xs.T
+    state.v[:, :] = vs.T
+    return peak, bufs[3][7]
+
+
 @njit(cache=True, error_model="numpy")
 def advance(model, state, n_steps, dt):
     """Advance ``state`` (DeployState) of ``model`` (DeployModel) ``n_steps`` steps of ``dt``
@@ -538,12 +815,15 @@ def advance(model, state, n_steps, dt):
     step changes that kinetic energy by Σ F_i·(v̄_i − v̄_c) dt, v̄ the mean of the velocities
     before and after it, and the weights' share of that sum is zero.
     """
+    if _grid_shape(model)[0] > 0:
+        return _advance_grid(model, state, n_steps, dt)
     mass = model.mass
     xs, vs, view = _soa_view(state)
     fs = np.empty(xs.shape)
     fas = np.zeros(xs.shape)
     lam = np.zeros(mass.shape[0])
-    buf = np.empty(12 * CHUNK)
+    buf = np.empty(12 * ROWLEN)
+    law = _law_arrays(model)
     rate = dt / mass
     _weights(model, fs)
     peak = 0.0
@@ -551,7 +831,7 @@ def advance(model, state, n_steps, dt):
     inv_m = 1.0 / mass.sum()
     losses = state.losses
     for step in range(n_steps):
-        tmax, p_diss = _segment_forces(model, view, fs, lam, fas, buf)
+        tmax, p_diss = _segment_forces(model, view, law, fs, lam, fas, buf)
         torque, tlink, q_diss = _hub_link_forces(model, view, fs.T, lam, fas.T)
         peak = max(peak, tmax, tlink)
         losses[0] += dt * (p_diss + q_diss)
