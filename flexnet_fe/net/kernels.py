@@ -275,21 +275,18 @@ def _run_law(xs, vs, law, chunk, tension, out, geometry=None):
     has no geometry stores. Measured side by side against the former two copies (2026-11-28,
     ``benchmarks/net_kernel_ab.py``, thread CPU time): the same speed within the noise, air off and
     on, and the same trajectories to the bit; carrying the stores in the air-free path costs it 9–14 %."""
-    (i0, s, k, base), (nq, c, stride, length, ostride) = chunk
+    (i0, s, k), (nq, c, stride, length) = chunk
     stiffness = law[1]
     for q in range(nq):
         iq = i0 + np.uint64(q * stride)
         kq = k + np.uint64(q * length)
-        oq = base + np.uint64(q * ostride)
+        oq = np.uint64(q * c)
         for r in range(c):
             rr = np.uint64(r)
             e = kq + rr
             o = oq + rr
             t, u0, u1, u2, lf, ldot, stretch = _law(xs, vs, law, iq + rr, iq + rr + s, e)
-            if tension is None:
-                out[ROW[12] + o] = t
-            else:
-                tension[e] = t
+            tension[e] = t
             out[o] = t * u0
             out[ROW[1] + o] = t * u1
             out[ROW[2] + o] = t * u2
@@ -309,14 +306,15 @@ def _run_air(vs, air, chunk, out):
     the half air force a [N] (0 for a zero-length segment), 11 its drag bound ½ ρ C_max d l |v|
     [kg/s]; turns rows 0–2 into the force on end i, T u + a, and rows 5–7 into the force on end
     j, a − T u. (A separate loop: fused with the law, the loop has too many arrays for the
-    run-time alias checks LLVM accepts, and stays scalar.)"""
+    run-time alias checks LLVM accepts, and stays scalar; the grid path's :func:`_grid_bars` is
+    fused: it reads positions, velocities and law data from one 2-D array each.)"""
     v0, v1, v2 = vs
     diameter, rho, wind = air
-    (i0, s, k, base), (nq, c, stride, length, ostride) = chunk
+    (i0, s, k), (nq, c, stride, length) = chunk
     for q in range(nq):
         iq = i0 + np.uint64(q * stride)
         kq = k + np.uint64(q * length)
-        oq = base + np.uint64(q * ostride)
+        oq = np.uint64(q * c)
         for r in range(c):
             rr = np.uint64(r)
             i = iq + rr
@@ -369,7 +367,7 @@ def _run_forces(model, rows, law, fs, lam, fas, run, buf):
             c = min(width, length - r0)
             i0 = np.uint64(a0 + q0 * stride + r0)
             k = np.uint64(k0 + q0 * length + r0)
-            chunk = ((i0, np.uint64(s), k, np.uint64(0)), (nq, c, stride, length, c))
+            chunk = ((i0, np.uint64(s), k), (nq, c, stride, length))
             ends = ((i0, np.uint64(s)), (nq, c, stride))
             if model.air:
                 _run_law(xs, vs, law, chunk, tension, buf, True)
@@ -560,28 +558,76 @@ def _grid_shape(model):
 
 @njit(cache=True)
 def _grid_law(model, law, w):
-    """The horizontal bars' data (law arrays as :func:`_law_arrays`', diameter) indexed by their
-    end-i knot, (n,) each: bar c of knot row q at q W + c; at q W + W − 1 (no bar) taut length
-    +inf, stiffness, damping and diameter 0 (slack, no air load: T = 0, a = 0). With them the
-    bars of a tile are one loop over its knots."""
-    taut, stiffness, damping = law
+    """The bars' data of a grid net indexed by their end-i knot: ((4, n), (4, n)) for the
+    horizontal and the vertical bars, rows taut length l0 − offset [m], stiffness [N/m], damping
+    [N s/m], diameter [m] (:func:`_law_arrays`). Where no bar is (a knot at a row's end; the last
+    row, vertically) taut length +inf, the rest 0: slack, no air load (T = 0, a = 0). With them
+    a tile's bars are one loop over its knots, reading one array (:func:`_grid_bars`)."""
     n = model.mass.shape[0]
-    out = (np.empty(n), np.empty(n), np.empty(n), np.empty(n))
-    for knot in range(n):
-        row, c = divmod(knot, w)
-        real = c < w - 1
-        e = knot - row
-        out[0][knot] = taut[e] if real else np.inf
-        out[1][knot] = stiffness[e] if real else 0.0
-        out[2][knot] = damping[e] if real else 0.0
-        out[3][knot] = model.diameter[e] if real else 0.0
-    return out
+    hl, vl = np.zeros((4, n)), np.zeros((4, n))
+    hl[0, :] = np.inf
+    vl[0, :] = np.inf
+    _by_knot((hl[0], vl[0]), law[0], w)
+    _by_knot((hl[1], vl[1]), law[1], w)
+    _by_knot((hl[2], vl[2]), law[2], w)
+    _by_knot((hl[3], vl[3]), model.diameter, w)
+    return hl, vl
+
+
+@njit(cache=True)
+def _by_knot(out, data, w):
+    """out = (horizontal, vertical) (n,): the segment data (m,) of a grid's bars at their end-i
+    knot (:func:`_grid_law`); the entries without a bar are left as they are."""
+    n = out[0].shape[0]
+    first_up = n - n // w  # the vertical bars' first segment: H (W − 1); (H − 1) W of them
+    for row in range(n // w):
+        out[0][row * w:row * w + w - 1] = data[row * (w - 1):row * (w - 1) + w - 1]
+    out[1][:n - w] = data[first_up:first_up + n - w]
+
+
+@njit(cache=True, error_model="numpy")
+def _grid_bars(xv, law, span, out, aero=None):
+    """The rope law (:func:`_law`) and, with ``aero`` = (rho [kg/m³], wind (3,) [m/s]) given, the
+    aerodynamics (as :func:`_run_air`) of the bars from knots a … a + n − 1 to knot + s (span =
+    (a, s, n, base) uint64; law (4, n) as :func:`_grid_law`'s, by knot; xv = (xs, vs) (3, n) [m],
+    [m/s]). Writes at base + l of out's rows (:data:`ROW`): 0–2 T u [N], 3 the dissipation rate
+    [W], 12 T [N]; with air 8–10 the half air force a [N], 11 its drag bound [kg/s]. One loop:
+    positions, velocities and law data each one 2-D array, so LLVM's run-time alias checks stay
+    few and it vectorises the law and the air together (no geometry rows)."""
+    xs, vs = xv
+    a, s, n, base = span
+    for l in range(n):
+        lu = np.uint64(l)
+        i = a + lu
+        j = i + s
+        o = base + lu
+        t, u0, u1, u2, lf, ldot, stretch = spring_force(
+            (xs[0, j] - xs[0, i], xs[1, j] - xs[1, i], xs[2, j] - xs[2, i]),
+            (vs[0, j] - vs[0, i], vs[1, j] - vs[1, i], vs[2, j] - vs[2, i]), 0.0,
+            (law[0, i], law[1, i], law[2, i], 0.0))
+        out[ROW[12] + o] = t
+        out[o] = t * u0
+        out[ROW[1] + o] = t * u1
+        out[ROW[2] + o] = t * u2
+        out[ROW[3] + o] = (t - law[1, i] * max(stretch, 0.0)) * ldot
+        if aero is not None:
+            rho, wind = aero
+            d = law[3, i]
+            vrel = (0.5 * (vs[0, i] + vs[0, j]) - wind[0], 0.5 * (vs[1, i] + vs[1, j]) - wind[1],
+                    0.5 * (vs[2, i] + vs[2, j]) - wind[2])
+            fx, fy, fz, vm = segment_aero_force((u0, u1, u2), lf, vrel, rho, d)
+            live = lf != 0.0
+            out[ROW[8] + o] = 0.5 * fx if live else 0.0
+            out[ROW[9] + o] = 0.5 * fy if live else 0.0
+            out[ROW[10] + o] = 0.5 * fz if live else 0.0
+            out[ROW[11] + o] = 0.5 * rho * C_MAX * d * lf * vm if live else 0.0
 
 
 @njit(cache=True)
 def _fill(buf, rows, span, value):
-    """buf[ROW[r] + i] = value for r < rows, span = (start, stop) (i in start … stop − 1)."""
-    for r in range(rows):
+    """buf[ROW[r] + i] = value for rows = (first, stop) (r in first … stop − 1), span = (start,
+    stop) (i likewise)."""
+    for r in range(rows[0], rows[1]):
         for i in range(span[0], span[1]):
             buf[ROW[r] + np.uint64(i)] = value
 
@@ -598,45 +644,33 @@ def _shift_down(buf, rows, start, w):
 @njit(cache=True)
 def _grid_pads(hb, w, nr, air):
     """The entries q W (q <= nr) of hb, where no bar is (a row's end: the padded bar of
-    :func:`_grid_law`). Air off, rows 0–3 and 12 +0.0: a knot at a row's start reads it as its
-    missing end j (f + −1 × +0.0 = f), one at a row's end as its missing end i (f + +0.0 = f,
-    but for f = −0.0, which needs a −0.0 weight component). With air, the rows added at both
-    ends (0–2, 5–11) −0.0 (x + −0.0 = x, always). Rows 3 and 12 (+0.0) enter the tile's
-    dissipation sum and largest tension."""
+    :func:`_grid_law`): rows 0–3 (T u, dissipation) and 12 (tension) +0.0, with air rows 8–11
+    (a, λ) −0.0. A knot at a row's start reads them as its missing end j: f + −1 × (+0.0) = f, or
+    with air f + (−0.0 − (+0.0)) = f; one at a row's end as its missing end i: f + (+0.0), or
+    f + (+0.0 + −0.0), = f but for f = −0.0, which needs a −0.0 weight component m g. The air's
+    share and λ, from +0.0, + −0.0: unchanged. Rows 3 and 12 enter the tile's sums as zeros."""
     for q in range(nr + 1):
-        _fill(hb, 12 if air else 4, (q * w, q * w + 1), -0.0 if air else 0.0)
-        hb[ROW[3] + np.uint64(q * w)] = 0.0
-        hb[ROW[12] + np.uint64(q * w)] = 0.0
+        _fill(hb, (0, 4), (q * w, q * w + 1), 0.0)
+        _fill(hb, (12, 13), (q * w, q * w + 1), 0.0)
+        if air:
+            _fill(hb, (8, 12), (q * w, q * w + 1), -0.0)
 
 
 @njit(cache=True, error_model="numpy")
-def _grid_tile_law(rows, laws, hb, vb, tile):
-    """The rope law (:func:`_run_law`, with air :func:`_run_air`) of a tile's bars (tile = ((a,
-    kv) uint64, (nr, nv, W), air): knots a … a + nr W − 1, nv rows of them with bars up, the
-    first at kv): the horizontal ones into hb (the bar from knot a + l at 1 + l: that knot reads
-    its end-i force at l + 1, the next its end-j force there), the vertical ones into vb from W
-    (knot a + l's end i at W + l). Returns (largest tension's bit pattern, dissipation rate [W])."""
-    (a, kv), (nr, nv, w), air = tile
-    xs, vs, tension, bits = rows
-    law, hlaw, aero = laws
+def _grid_tile_law(xv, laws, hb, vb, tile):
+    """The bars of a tile (:func:`_grid_bars`; tile = (a uint64, (nr, nv, W), aero or None):
+    knots a … a + nr W − 1, nv rows of them with bars up): the horizontal ones into hb (the bar
+    from knot a + l at 1 + l: that knot reads its end-i force at l + 1, the next its end-j force
+    there), the vertical ones into vb from W (knot a + l's end i at W + l). laws as
+    :func:`_grid_law`'s. Returns (largest tension's bit pattern, dissipation rate [W])."""
+    a, (nr, nv, w), aero = tile
     wu, one = np.uint64(w), np.uint64(1)
-    hl = (hlaw[0], hlaw[1], hlaw[2])
-    chunk = ((a, one, a, one), (1, nr * w - 1, 0, nr * w - 1, 0))
-    if air:
-        _run_law(xs, vs, hl, chunk, None, hb, True)
-        _run_air(vs, (hlaw[3], aero[1], aero[2]), chunk, hb)
-    else:
-        _run_law(xs, vs, hl, chunk, None, hb)
-    _grid_pads(hb, w, nr, air)
+    _grid_bars(xv, laws[0], (a, one, np.uint64(nr * w - 1), one), hb, aero)
+    _grid_pads(hb, w, nr, aero is not None)
     tbits = _max_bits(hb.view(np.int64), ROW[12], nr * w, 0)
     p_diss = _sum(hb, ROW[3], nr * w)
     if nv > 0:
-        chunk = ((a, wu, kv, wu), (1, nv * w, 0, nv * w, 0))
-        if air:
-            _run_law(xs, vs, law, chunk, None, vb, True)
-            _run_air(vs, aero, chunk, vb)
-        else:
-            _run_law(xs, vs, law, chunk, None, vb)
+        _grid_bars(xv, laws[1], (a, wu, np.uint64(nv * w), wu), vb, aero)
         tbits = _max_bits(vb.view(np.int64), ROW[12] + wu, nv * w, tbits)
         p_diss += _sum(vb, ROW[3] + wu, nv * w)
     return tbits, p_diss
@@ -682,8 +716,8 @@ def _grid_update(xs, vs, mg, rate, hb, vb, tile, dt):
 @njit(cache=True, error_model="numpy")
 def _grid_update_air(state, mg, rate, bufs, tile, dt):
     """:func:`_grid_update` with air (state = (xs, vs), bufs = (hb, vb, nb)): per knot the force
-    as :func:`_run_forces` adds it (end j then end i of the rows 5–7 and 0–2 that
-    :func:`_run_air` leaves), the air's share fa (rows 8–10, from 0) into nb's rows 0–2, the
+    as :func:`_run_forces` adds it (end j then end i, a − T u and T u + a from rows 8–10 and 0–2,
+    as :func:`_run_air` forms them for it), the air's share fa (rows 8–10, from 0) into nb's rows 0–2, the
     velocity sum 2 v + a f before the update into rows 3–5 (for the air's work, as
     :func:`_air_work`), and its drag bound λ (row 11, from 0) times a into row 6."""
     a, n, w = tile
@@ -692,14 +726,14 @@ def _grid_update_air(state, mg, rate, bufs, tile, dt):
     mass, gravity = mg
     one = np.uint64(1)
     for comp in range(3):
-        o, oj, oa, g = ROW[comp], ROW[5 + comp], ROW[8 + comp], gravity[comp]
+        o, oa, g = ROW[comp], ROW[8 + comp], gravity[comp]
         for l in range(n):
             lu = np.uint64(l)
             node = a + lu
-            f = (mass[node] * g + hb[oj + lu]) + hb[o + lu + one]
-            f = (f + vb[oj + lu]) + vb[o + w + lu]
-            fa = (0.0 + hb[oa + lu]) + hb[oa + lu + one]
-            nb[ROW[comp] + lu] = (fa + vb[oa + lu]) + vb[oa + w + lu]
+            haj, hai, vaj, vai = hb[oa + lu], hb[oa + lu + one], vb[oa + lu], vb[oa + w + lu]
+            f = (mass[node] * g + (haj - hb[o + lu])) + (hb[o + lu + one] + hai)
+            f = (f + (vaj - vb[o + lu])) + (vb[o + w + lu] + vai)
+            nb[ROW[comp] + lu] = (((0.0 + haj) + hai) + vaj) + vai
             vo = vs[comp, node]
             nb[ROW[3 + comp] + lu] = 2.0 * vo + rate[node] * f
             vn = vo + rate[node] * f
@@ -736,19 +770,22 @@ def _grid_air_work(nb, mass, tile, acc):
 
 
 @njit(cache=True, error_model="numpy")
-def _grid_step(rows, laws, soa, bufs, grid, dt):
+def _grid_step(soa, laws, bufs, grid, dt):
     """One symplectic-Euler step of a grid net (:func:`_grid_shape`; grid = (W, H, B, last step?,
     air)), tile by tile of B knot rows: the laws of their bars (:func:`_grid_tile_law`; vb's first
     W entries hold the row below's bars, none below the first row, −0.0 above the last), then the
     tile's forces and update (:func:`_grid_update`, :func:`_grid_update_air` and
-    :func:`_grid_air_work`); the last step copies the tensions out. rows, laws as
-    :func:`_grid_tile_law`'s; soa = (xs, vs (3, n), (mass, gravity), rate (n,)); bufs = (hb, vb,
-    nb, acc (8,), zeroed by the caller). Returns (largest tension [N], dissipation rate [W])."""
+    :func:`_grid_air_work`); the last step copies the tensions out. soa = (xs, vs (3, n) [m],
+    [m/s], (mass, gravity), rate (n,), tension (m,) [N]); laws = (as :func:`_grid_law`'s, (rho,
+    wind)); bufs = (hb, vb, nb, acc (8,), zeroed by the caller). Returns (largest tension [N],
+    dissipation rate [W])."""
     w, h, b, last, air = grid
-    xs2, vs2, mg, rate = soa
+    xs2, vs2, mg, rate, tension = soa
     hb, vb, nb, acc = bufs
     nrow = 12 if air else 3
-    _fill(vb, nrow, (0, w), -0.0 if air else 0.0)
+    _fill(vb, (0, 3), (0, w), 0.0)
+    if air:
+        _fill(vb, (8, 12), (0, w), -0.0)
     tbits = 0
     p_diss = 0.0
     for r0 in range(0, h, b):
@@ -756,13 +793,16 @@ def _grid_step(rows, laws, soa, bufs, grid, dt):
         nv = min(nr, h - 1 - r0)
         a = np.uint64(r0 * w)
         kv = np.uint64(h * (w - 1)) + a
-        tb, p = _grid_tile_law(rows, laws, hb, vb, ((a, kv), (nr, nv, w), air))
+        if air:
+            tb, p = _grid_tile_law((xs2, vs2), laws[0], hb, vb, (a, (nr, nv, w), laws[1]))
+        else:
+            tb, p = _grid_tile_law((xs2, vs2), laws[0], hb, vb, (a, (nr, nv, w), None))
         tbits = max(tbits, tb)
         p_diss += p
         if nv < nr:
-            _fill(vb, nrow, (nr * w, nr * w + w), -0.0)
+            _fill(vb, (0, nrow), (nr * w, nr * w + w), -0.0)
         if last:
-            _grid_tensions(rows[2], hb, vb, ((np.uint64(r0 * (w - 1)), kv), (nr, nv, w)))
+            _grid_tensions(tension, hb, vb, ((np.uint64(r0 * (w - 1)), kv), (nr, nv, w)))
         tile = (a, np.uint64(nr * w), np.uint64(w))
         if air:
             _grid_update_air((xs2, vs2), mg, rate, (hb, vb, nb), tile, dt)
@@ -780,16 +820,14 @@ def _advance_grid(model, state, n_steps, dt):
     w, b = _grid_shape(model)
     xs, vs, view = _soa_view(state)
     rate = dt / mass
-    rows = ((xs[0], xs[1], xs[2]), (vs[0], vs[1], vs[2]), view.tension, view.tension.view(np.int64))
-    law = _law_arrays(model)
-    laws = (law, _grid_law(model, law, w), (model.diameter, model.rho, model.wind))
-    soa = (xs, vs, (mass, model.gravity), rate)
+    laws = (_grid_law(model, _law_arrays(model), w), (model.rho, model.wind))
+    soa = (xs, vs, (mass, model.gravity), rate, view.tension)
     bufs = (np.empty(13 * ROWLEN), np.empty(13 * ROWLEN), np.empty(7 * ROWLEN), np.zeros(8))
     inv_m = 1.0 / mass.sum()
     peak = 0.0
     for step in range(n_steps):
         grid = (w, mass.shape[0] // w, b, step + 1 == n_steps, model.air)
-        tmax, p_diss = _grid_step(rows, laws, soa, bufs, grid, dt)
+        tmax, p_diss = _grid_step(soa, laws, bufs, grid, dt)
         peak = max(peak, tmax)
         state.losses[0] += dt * p_diss
         if model.air:
