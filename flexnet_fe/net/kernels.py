@@ -564,25 +564,25 @@ def _grid_law(model, law, w):
     row, vertically) taut length +inf, the rest 0: slack, no air load (T = 0, a = 0). With them
     a tile's bars are one loop over its knots, reading one array (:func:`_grid_bars`)."""
     n = model.mass.shape[0]
-    hl, vl = np.zeros((4, n)), np.zeros((4, n))
-    hl[0, :] = np.inf
-    vl[0, :] = np.inf
-    _by_knot((hl[0], vl[0]), law[0], w)
-    _by_knot((hl[1], vl[1]), law[1], w)
-    _by_knot((hl[2], vl[2]), law[2], w)
-    _by_knot((hl[3], vl[3]), model.diameter, w)
+    hl, vl = np.empty((4, n)), np.empty((4, n))
+    _by_knot((hl[0], vl[0]), law[0], w, np.inf)
+    _by_knot((hl[1], vl[1]), law[1], w, 0.0)
+    _by_knot((hl[2], vl[2]), law[2], w, 0.0)
+    _by_knot((hl[3], vl[3]), model.diameter, w, 0.0)
     return hl, vl
 
 
 @njit(cache=True)
-def _by_knot(out, data, w):
+def _by_knot(out, data, w, pad):
     """out = (horizontal, vertical) (n,): the segment data (m,) of a grid's bars at their end-i
-    knot (:func:`_grid_law`); the entries without a bar are left as they are."""
+    knot (:func:`_grid_law`), ``pad`` where no bar is."""
     n = out[0].shape[0]
     first_up = n - n // w  # the vertical bars' first segment: H (W − 1); (H − 1) W of them
     for row in range(n // w):
         out[0][row * w:row * w + w - 1] = data[row * (w - 1):row * (w - 1) + w - 1]
+        out[0][row * w + w - 1] = pad
     out[1][:n - w] = data[first_up:first_up + n - w]
+    out[1][n - w:] = pad
 
 
 @njit(cache=True, error_model="numpy")
