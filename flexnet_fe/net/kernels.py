@@ -310,6 +310,7 @@ def _run_air(vs, air, chunk, out):
     fused: it reads positions, velocities and law data from one 2-D array each.)"""
     v0, v1, v2 = vs
     diameter, rho, wind = air
+    w0, w1, w2 = wind[0], wind[1], wind[2]  # scalars: read in the loop, LLVM gathers them lane by lane
     (i0, s, k), (nq, c, stride, length) = chunk
     for q in range(nq):
         iq = i0 + np.uint64(q * stride)
@@ -322,8 +323,7 @@ def _run_air(vs, air, chunk, out):
             d = diameter[kq + rr]
             o = oq + rr
             lf = out[ROW[4] + o]
-            vrel = (0.5 * (v0[i] + v0[j]) - wind[0], 0.5 * (v1[i] + v1[j]) - wind[1],
-                    0.5 * (v2[i] + v2[j]) - wind[2])
+            vrel = (0.5 * (v0[i] + v0[j]) - w0, 0.5 * (v1[i] + v1[j]) - w1, 0.5 * (v2[i] + v2[j]) - w2)
             fx, fy, fz, vm = segment_aero_force((out[ROW[5] + o], out[ROW[6] + o], out[ROW[7] + o]), lf, vrel,
                                                 rho, d)
             live = lf != 0.0
@@ -596,6 +596,9 @@ def _grid_bars(xv, law, span, out, aero=None):
     few and it vectorises the law and the air together (no geometry rows)."""
     xs, vs = xv
     a, s, n, base = span
+    if aero is not None:  # the wind as scalars: read in the loop, LLVM gathers it lane by lane
+        rho, wind = aero
+        w0, w1, w2 = wind[0], wind[1], wind[2]
     for l in range(n):
         lu = np.uint64(l)
         i = a + lu
@@ -611,10 +614,8 @@ def _grid_bars(xv, law, span, out, aero=None):
         out[ROW[2] + o] = t * u2
         out[ROW[3] + o] = (t - law[1, i] * max(stretch, 0.0)) * ldot
         if aero is not None:
-            rho, wind = aero
             d = law[3, i]
-            vrel = (0.5 * (vs[0, i] + vs[0, j]) - wind[0], 0.5 * (vs[1, i] + vs[1, j]) - wind[1],
-                    0.5 * (vs[2, i] + vs[2, j]) - wind[2])
+            vrel = (0.5 * (vs[0, i] + vs[0, j]) - w0, 0.5 * (vs[1, i] + vs[1, j]) - w1, 0.5 * (vs[2, i] + vs[2, j]) - w2)
             fx, fy, fz, vm = segment_aero_force((u0, u1, u2), lf, vrel, rho, d)
             live = lf != 0.0
             out[ROW[8] + o] = 0.5 * fx if live else 0.0
