@@ -747,26 +747,38 @@ def _grid_update_air(state, mg, rate, bufs, tile, dt):
 
 
 @njit(cache=True, fastmath={"reassoc", "nsz"})
-def _dot(x, y, n):
-    """Σ x[0][x[1] + i] y[0][y[1] + i], i < n (x, y = (array, uint64 start)), reassociated."""
-    total = 0.0
-    for i in range(n):
-        iu = np.uint64(i)
-        total += x[0][x[1] + iu] * y[0][y[1] + iu]
-    return total
+def _grid_air_sums(nb, mass, tile):
+    """A tile's terms of the air's work (:func:`_air_work`): (Σ fa·(2v + a f), Σ fa (3,),
+    Σ m (2v + a f) (3,)) over its knots a … a + n − 1 (tile = (a, n) uint64; fa and 2v + a f in
+    nb's rows 0–2 and 3–5 from 0, :func:`_grid_update_air`; mass (n,) [kg]); one loop,
+    reassociated (vector partial sums: order-dependent round-off)."""
+    a, n = tile
+    w_air = f0 = f1 = f2 = m0 = m1 = m2 = 0.0
+    for l in range(n):
+        lu = np.uint64(l)
+        fa0, fa1, fa2 = nb[lu], nb[ROW[1] + lu], nb[ROW[2] + lu]
+        dv0, dv1, dv2 = nb[ROW[3] + lu], nb[ROW[4] + lu], nb[ROW[5] + lu]
+        m = mass[a + lu]
+        w_air += fa0 * dv0 + fa1 * dv1 + fa2 * dv2
+        f0 += fa0
+        f1 += fa1
+        f2 += fa2
+        m0 += m * dv0
+        m1 += m * dv1
+        m2 += m * dv2
+    return w_air, (f0, f1, f2), (m0, m1, m2)
 
 
 @njit(cache=True, error_model="numpy")
 def _grid_air_work(nb, mass, tile, acc):
-    """Adds a tile's terms of the air's work (:func:`_air_work`: Σ fa·(2v + a f), Σ fa (3,),
-    Σ m (2v + a f) (3,)) from nb (:func:`_grid_update_air`) to acc[0], acc[1:4], acc[4:7], and its
-    largest drag number λ a to acc[7] (tile = (a, n) uint64, mass (n,) [kg])."""
-    a, n = tile
+    """Adds a tile's terms of the air's work (:func:`_grid_air_sums`) to acc[0], acc[1:4],
+    acc[4:7], and its largest drag number λ a (nb's row 6) to acc[7] (tile = (a, n) uint64)."""
+    w_air, fa, mv = _grid_air_sums(nb, mass, tile)
+    acc[0] += w_air
     for comp in range(3):
-        acc[0] += _dot((nb, ROW[comp]), (nb, ROW[3 + comp]), n)
-        acc[1 + comp] += _sum(nb, ROW[comp], n)
-        acc[4 + comp] += _dot((mass, a), (nb, ROW[3 + comp]), n)
-    top = np.int64(_max_bits(nb.view(np.int64), ROW[6], n, 0)).view(np.float64)
+        acc[1 + comp] += fa[comp]
+        acc[4 + comp] += mv[comp]
+    top = np.int64(_max_bits(nb.view(np.int64), ROW[6], tile[1], 0)).view(np.float64)
     acc[7] = max(acc[7], top)
 
 
@@ -807,7 +819,7 @@ def _grid_step(soa, laws, bufs, grid, dt):
         tile = (a, np.uint64(nr * w), np.uint64(w))
         if air:
             _grid_update_air((xs2, vs2), mg, rate, (hb, vb, nb), tile, dt)
-            _grid_air_work(nb, mg[0], (a, nr * w), acc)
+            _grid_air_work(nb, mg[0], (a, np.uint64(nr * w)), acc)
         else:
             _grid_update(xs2, vs2, mg, rate, hb, vb, tile, dt)
         _shift_down(vb, nrow, nr * w, w)
