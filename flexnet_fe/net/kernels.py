@@ -15,6 +15,14 @@ an L1-sized scratch, and the forces are added to the nodes in conflict-free loop
 node its contributions in the order of the segment-by-segment loop: tensions, forces and
 trajectories are the same to the bit (only the summed dissipation and air work are added in
 another order). The other segments (hub links, short runs) take the per-segment loop.
+
+A traction net's grid of W × H knots (its two blocks, no hub: :func:`_grid_shape`) takes its own
+path, tile by tile of about TILE knots (whole knot rows): the law and the air of the tile's bars
+in one vector loop each for the horizontal and the vertical ones (:func:`_grid_bars`, their data
+laid out by knot once per call), then each knot's force, added in the per-segment loop's order,
+and its update, while the tile is in cache (:func:`_grid_update`): no separate scatter, update or
+air-work passes over the whole net. The same trajectories to the bit (tests/net/test_kernel_runs.py),
+1.5–1.9× faster than the run path (docs/performance.md, issue 15).
 """
 
 from __future__ import annotations
@@ -256,7 +264,7 @@ def _law_arrays(model):
 
 
 ROW = tuple(np.uint64(k * ROWLEN) for k in range(13))
-"""Offsets of the rows of the run scratch (12 CHUNK,): unsigned, as every index of the run
+"""Offsets of the rows of the scratch (13 ROWLEN,): unsigned, as every index of the run
 loops (numba tests a signed index for wrap-around, which keeps LLVM from vectorising), and
 constant, so LLVM checks the aliasing of the scratch once, not row by row."""
 
@@ -265,7 +273,7 @@ constant, so LLVM checks the aliasing of the scratch once, not row by row."""
 def _run_law(xs, vs, law, chunk, tension, out, geometry=None):
     """The rope law (:func:`_law`) over a run chunk: chunk = ((i0, s, k) uint64, (nq, c, stride,
     length)), segment k + q length + r (q < nq, r < c) joins nodes i0 + q stride + r and that
-    + s. Writes tension (m,) [N] and into out (12 CHUNK,) at q c + r of its rows (:data:`ROW`):
+    + s. Writes tension (m,) [N] and into out (13 ROWLEN,) at q c + r of its rows (:data:`ROW`):
     rows 0–2 the force T u on end i [N], 3 the dissipation rate (T − K s) l̇ [W]; with
     ``geometry`` given (any value but None: the air path) also rows 4 the straight length l [m]
     and 5–7 the unit vector u, for :func:`_run_air`.
@@ -348,9 +356,9 @@ def _run_forces(model, rows, law, fs, lam, fas, run, buf):
     """Adds the tensions and, with air, the aerodynamics of a run (``run`` = (k0, nrows, length,
     a0, stride, s), :func:`spring_blocks`) to fs (3, n) [N] (and the air's to fas (3, n) [N],
     its drag bound to lam (n,) [kg/s]); writes their tension into rows[2] (m,) [N]. rows = (3
-    position rows (n,) [m], 3 velocity rows (n,) [m/s], tension, its int64 view); buf
-    (12 CHUNK,) scratch. Returns (the largest tension's bit pattern (:func:`_max_bits`), the
-    dissipation rate [W]).
+    position rows (n,) [m], 3 velocity rows (n,) [m/s], tension, its int64 view); law as
+    :func:`_law`'s; buf (12 ROWLEN,) scratch. Returns (the largest tension's bit pattern
+    (:func:`_max_bits`), the dissipation rate [W]).
 
     Chunk by chunk (whole rows while they fit in CHUNK, else pieces of one row): the law over
     contiguous node ranges (no gathers), then the forces added to the nodes (:func:`_scatter`:
@@ -428,8 +436,8 @@ def _segment_forces(model, view, law, fs, lam, fas, buf):
     """Adds the forces of every segment that is not a hub link (runs by :func:`_run_forces`,
     the rest by :func:`_block_forces`, in the order of ``model.blocks``) to fs (3, n) [N], their
     air loads to fas (3, n) [N] and drag bounds to lam (n,) [kg/s]; writes their tension.
-    ``view`` a DeployState whose x, v are the transposes of (3, n) arrays. Returns (the largest
-    tension [N], the dissipation rate [W])."""
+    ``view`` a DeployState whose x, v are the transposes of (3, n) arrays; law as :func:`_law`'s.
+    Returns (the largest tension [N], the dissipation rate [W])."""
     xs = view.x.T
     vs = view.v.T
     rows = ((xs[0], xs[1], xs[2]), (vs[0], vs[1], vs[2]), view.tension, view.tension.view(np.int64))
@@ -615,7 +623,8 @@ def _grid_bars(xv, law, span, out, aero=None):
         out[ROW[3] + o] = (t - law[1, i] * max(stretch, 0.0)) * ldot
         if aero is not None:
             d = law[3, i]
-            vrel = (0.5 * (vs[0, i] + vs[0, j]) - w0, 0.5 * (vs[1, i] + vs[1, j]) - w1, 0.5 * (vs[2, i] + vs[2, j]) - w2)
+            vrel = (0.5 * (vs[0, i] + vs[0, j]) - w0, 0.5 * (vs[1, i] + vs[1, j]) - w1,
+                    0.5 * (vs[2, i] + vs[2, j]) - w2)
             fx, fy, fz, vm = segment_aero_force((u0, u1, u2), lf, vrel, rho, d)
             live = lf != 0.0
             out[ROW[8] + o] = 0.5 * fx if live else 0.0
@@ -717,9 +726,9 @@ def _grid_update(xs, vs, mg, rate, hb, vb, tile, dt):
 @njit(cache=True, error_model="numpy")
 def _grid_update_air(state, mg, rate, bufs, tile, dt):
     """:func:`_grid_update` with air (state = (xs, vs), bufs = (hb, vb, nb)): per knot the force
-    as :func:`_run_forces` adds it (end j then end i, a − T u and T u + a from rows 8–10 and 0–2,
-    as :func:`_run_air` forms them for it), the air's share fa (rows 8–10, from 0) into nb's rows 0–2, the
-    velocity sum 2 v + a f before the update into rows 3–5 (for the air's work, as
+    as :func:`_run_forces` adds it (end j then end i: a − T u and T u + a, formed from rows 8–10
+    and 0–2 as :func:`_run_air` forms them), the air's share fa (rows 8–10, from 0) into nb's
+    rows 0–2, the velocity sum 2 v + a f before the update into rows 3–5 (for the air's work, as
     :func:`_air_work`), and its drag bound λ (row 11, from 0) times a into row 6."""
     a, n, w = tile
     xs, vs = state

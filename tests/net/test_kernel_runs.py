@@ -88,8 +88,8 @@ def _split_rows(blocks: np.ndarray) -> np.ndarray:
     segments, no longer the grid's two blocks, so the kernel takes its run path."""
     k0, rows, length, a0, stride, s = blocks[0]
     half = rows // 2
-    return np.array([[k0, half, length, a0, stride, s],
-                     [k0 + half * length, rows - half, length, a0 + half * stride, stride, s], blocks[1]], dtype=np.int64)
+    second = [k0 + half * length, rows - half, length, a0 + half * stride, stride, s]
+    return np.array([[k0, half, length, a0, stride, s], second, blocks[1]], dtype=np.int64)
 
 
 # 101 and 61 knots a side: tiles of TILE // W knot rows, the last one a single row without bars up
@@ -117,6 +117,7 @@ def test_grid_tiles_and_runs_give_the_per_segment_trajectory_to_the_bit(mesh, ai
 
 
 def test_only_a_traction_grid_takes_the_grid_path():
-    assert _grid_shape(kernel_model(build_rotary(RotaryNet()), Environment(np.zeros(3), 0.0, np.zeros(3), False))) == (0, 0)
+    still = Environment(np.zeros(3), 0.0, np.zeros(3), False)
+    assert _grid_shape(kernel_model(build_rotary(RotaryNet()), still)) == (0, 0)
     sub = build_traction(NET.model_copy(update={"subdivisions": 2}))  # split bars: the per-segment loop
-    assert _grid_shape(kernel_model(sub, Environment(np.zeros(3), 0.0, np.zeros(3), False))) == (0, 0)
+    assert _grid_shape(kernel_model(sub, still)) == (0, 0)
