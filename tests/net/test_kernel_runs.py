@@ -1,12 +1,14 @@
-"""The deploy kernel's vector path over runs of a regular net (``net.kernels.spring_blocks``)
-against its per-segment loop: the same forces in the same order, so the same trajectory to
-the bit, air off and on, with taut and slack segments; and the blocks of a rotary net."""
+"""The deploy kernel's vector paths against its per-segment loop: over runs of a regular net
+(``net.kernels.spring_blocks``) and, for a traction net's grid, tile by tile of knot rows with
+the update fused (``net.kernels._grid_step``): the same forces in the same order, so the same
+trajectory to the bit, air off and on, with taut and slack segments; and the blocks of a rotary
+net."""
 
 import numpy as np
 import pytest
 
 from flexnet_fe.net.config import RotaryNet, TractionNet
-from flexnet_fe.net.kernels import MIN_RUN, advance, spring_blocks
+from flexnet_fe.net.kernels import MIN_RUN, TILE, _grid_shape, advance, spring_blocks
 from flexnet_fe.net.state import Environment, initial_state, kernel_model, kernel_state
 from flexnet_fe.net.timestep import spring_limit
 from flexnet_fe.net.topology import build_rotary, build_traction
@@ -79,3 +81,43 @@ def test_rows_stepping_down_stay_separate_runs():
     springs = np.array([[70 + r, 71 + r] for r in range(MIN_RUN)] + [[40 + r, 41 + r] for r in range(MIN_RUN)])
     b = spring_blocks(springs, np.zeros(len(springs), bool))
     assert b.tolist() == [[0, 1, MIN_RUN, 70, 0, 1], [MIN_RUN, 1, MIN_RUN, 40, 0, 1]]
+
+
+def _split_rows(blocks: np.ndarray) -> np.ndarray:
+    """A traction net's blocks with its rows of horizontal bars cut in two blocks: the same
+    segments, no longer the grid's two blocks, so the kernel takes its run path."""
+    k0, rows, length, a0, stride, s = blocks[0]
+    half = rows // 2
+    second = [k0 + half * length, rows - half, length, a0 + half * stride, stride, s]
+    return np.array([[k0, half, length, a0, stride, s], second, blocks[1]], dtype=np.int64)
+
+
+# 101 and 61 knots a side: tiles of TILE // W knot rows, the last one a single row without bars up
+# (101 = 5 x 20 + 1) or several rows, all but the last with bars up (61 = 33 + 28)
+@pytest.mark.parametrize("mesh", [0.01, 1.0 / 60.0], ids=["101", "61"])
+@pytest.mark.parametrize("air", [False, True], ids=["air_off", "air_on"])
+def test_grid_tiles_and_runs_give_the_per_segment_trajectory_to_the_bit(mesh, air):
+    model = build_traction(NET.model_copy(update={"mesh_size": mesh}))
+    env = Environment(np.array([0.0, -9.81, 0.0]), 0.5 if air else 0.0, np.array([3.0, 0.0, -1.0]), air)
+    grid = kernel_model(model, env)
+    w, rows_per_tile = _grid_shape(grid)
+    assert w == round(1.0 / mesh) + 1 and rows_per_tile == TILE // w and w > rows_per_tile > 1  # several tiles
+    runs = grid._replace(blocks=_split_rows(grid.blocks))
+    loop = grid._replace(blocks=np.array([[0, 1, model.n_springs, 0, 0, 0]], dtype=np.int64))
+    assert _grid_shape(runs) == (0, 0) and _grid_shape(loop) == (0, 0)
+    dt = 0.25 * spring_limit(model)
+    states = [initial_state(model, (0.0, 0.0, 20.0)) for _ in range(3)]
+    outs = [advance(m, kernel_state(st), 200, dt) for m, st in zip((grid, runs, loop), states)]
+    ref = states[2]
+    assert np.count_nonzero(ref.tension == 0.0) > 0 and np.count_nonzero(ref.tension > 0.0) > 0
+    for st, out in zip(states[:2], outs[:2]):
+        assert np.array_equal(st.x, ref.x) and np.array_equal(st.v, ref.v) and np.array_equal(st.tension, ref.tension)
+        assert out == outs[2]  # peak tension, drag number
+        assert st.losses == pytest.approx(ref.losses, rel=1e-12, abs=1e-15)  # sums, added in another order
+
+
+def test_only_a_traction_grid_takes_the_grid_path():
+    still = Environment(np.zeros(3), 0.0, np.zeros(3), False)
+    assert _grid_shape(kernel_model(build_rotary(RotaryNet()), still)) == (0, 0)
+    sub = build_traction(NET.model_copy(update={"subdivisions": 2}))  # split bars: the per-segment loop
+    assert _grid_shape(kernel_model(sub, still)) == (0, 0)
