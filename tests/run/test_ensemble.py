@@ -146,7 +146,8 @@ def test_run_writes_table_statistics_and_picture(tmp_path, monkeypatch):
     html = (tmp_path / "ensemble_report.html").read_text()
     assert "ensemble.png" in html and "member_05" in html
     # its statistics table: rudder_3 held to 340 − 9k MPa, k = 0…5 → mean 317.5 MPa
-    assert "Ensemble statistics" in html and "shell.rudder_3.held_to_pa [MPa]" in html and ">317.5<" in html
+    assert "ensemble report: ensemble.csv" in html and "Ensemble statistics" in html
+    assert "shell.rudder_3.held_to_pa [MPa]" in html and ">317.5<" in html
     # rudder_3 above 330 MPa in members 0 and 1 (340, 331); the missile hits in 5 of 6
     assert "<td>rudder_3 above its allowable</td><td class=\"num\">2 of 6</td>" in html
     assert "<td>flight.hit</td><td class=\"num\">5 of 6</td>" in html
