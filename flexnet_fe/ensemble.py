@@ -56,8 +56,6 @@ OUTCOMES = ("flight.hit", "collide.passed_through")
 Z95 = 1.959963984540054
 """the standard normal's two-sided 95 % quantile"""
 
-LARGEST = "shell.largest_governing_pa"
-"""the case's largest fin stress [Pa]: over the fins, each one's strike envelope where computed, else its peak"""
 
 _FIN_KEY = re.compile(r"^shell\.([^.]+)\." + re.escape(FIN_PEAK) + "$")
 
@@ -69,6 +67,10 @@ def cell_offsets(n: int, cell: float) -> np.ndarray:
     k = np.arange(n, dtype=float)[:, None]
     alpha = np.array([1.0 / PLASTIC, 1.0 / PLASTIC ** 2])
     return (np.mod(0.5 + k * alpha, 1.0) - 0.5) * cell
+
+
+MEMBER_0 = "member_00"
+"""the label of member 0, the case as given (:func:`members`)"""
 
 
 def members(case_path: Path, base: list[str], aim: tuple[float, float], cell: float, n: int) -> list[Variant]:
@@ -163,7 +165,8 @@ def governing(row: dict, fin: str) -> float | None:
 def summarise(rows: list[dict], tolerance: float) -> dict[str, Any]:
     """The ensemble's statistics from its member rows (failed members left out and counted):
     ``headlines`` (key → :func:`statistics`), ``fins`` (fin → {"peak": …, "governing": …}),
-    ``largest`` (:data:`LARGEST`), ``outcomes`` (:data:`OUTCOMES` → :func:`proportion`) and
+    ``largest`` (the case's largest fin stress [Pa] per member: over its fins, each held to its
+    strike envelope where computed, else its peak), ``outcomes`` (:data:`OUTCOMES` → :func:`proportion`) and
     ``over_allowable`` (fin, and ``any``, → the share of members above the fin's allowable), with
     ``members``, ``failed`` and ``tolerance``. Values may be numbers or their CSV text."""
     ok = [r for r in rows if not r.get(ERROR)]
@@ -198,13 +201,14 @@ def plot(rows: list[dict], stats: dict, path: Path) -> Path:
     fig, ax = plt.subplots(figsize=(1.1 * len(fins) + 3.0, 4.6))
     for i, fin in enumerate(fins):
         s = stats["largest"] if fin == "largest" else stats["fins"][fin]["governing"]
-        vals = [(max(float(governing(r, f) or 0.0) for f in stats["fins"]) if fin == "largest"
-                 else governing(r, fin)) for r in ok]
-        vals = [float(v) for v in vals if v not in (None, "")]
-        xs = i + np.linspace(-0.18, 0.18, max(len(vals), 1))[: len(vals)]
-        ax.plot(xs, [1e-6 * float(v) for v in vals], "o", color="C0", ms=4, alpha=0.8)
-        if vals:
-            ax.plot(xs[:1], [1e-6 * float(vals[0])], "o", mfc="none", mec="k", ms=9)
+        pairs = [(r[LABEL], max(float(governing(r, f) or 0.0) for f in stats["fins"]) if fin == "largest"
+                  else governing(r, fin)) for r in ok]
+        pairs = [(label, float(v)) for label, v in pairs if v not in (None, "")]
+        xs = i + np.linspace(-0.18, 0.18, max(len(pairs), 1))[: len(pairs)]
+        ax.plot(xs, [1e-6 * v for _, v in pairs], "o", color="C0", ms=4, alpha=0.8)
+        given = [(x, v) for x, (label, v) in zip(xs, pairs) if label == MEMBER_0]
+        if given:  # the case as given (member 0), when it ran
+            ax.plot([given[0][0]], [1e-6 * given[0][1]], "o", mfc="none", mec="k", ms=9)
         if s.get("std") is not None:
             ax.add_patch(plt.Rectangle((i + 0.24, 1e-6 * (s["mean"] - s["std"])), 0.14, 2e-6 * s["std"],
                                        color="C1", alpha=0.3))
