@@ -34,17 +34,16 @@ def rows_of(stats: dict) -> dict[str, dict]:
 def member_values(path: Path) -> dict[str, dict[str, float]]:
     """member label → quantity → value (the fins' governing stresses [Pa] and the headlines),
     read from an ensemble's member table; members with an error left out."""
-    from flexnet_fe.ensemble import HEADLINES, fin_names, governing
+    from flexnet_fe.ensemble import HEADLINES, fin_names, governing, largest_fin_stress
 
     rows = [r for r in csv.DictReader(open(path / "ensemble.csv")) if not r.get("error")]
+    fins = fin_names(rows)
     out = {}
     for r in rows:
         vals = {k: float(r[k]) for k in HEADLINES if r.get(k) not in (None, "")}
-        vals.update({f"{f} [MPa]": float(governing(r, f)) for f in fin_names(rows)
-                     if governing(r, f) not in (None, "")})
-        gov = [v for k, v in vals.items() if k.endswith("[MPa]")]
-        if gov:
-            vals["largest fin stress [MPa]"] = max(gov)
+        vals.update({f"{f} [MPa]": float(governing(r, f)) for f in fins if governing(r, f) not in (None, "")})
+        if fins:
+            vals["largest fin stress [MPa]"] = largest_fin_stress(r, fins)
         out[r["label"] + f"@{r['aim_x_m']},{r['aim_y_m']}"] = vals
     return out
 

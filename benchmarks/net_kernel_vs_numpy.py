@@ -27,11 +27,9 @@ os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 
 import numpy as np  # noqa: E402
 
-from flexnet_fe.atmosphere import isa  # noqa: E402
 from flexnet_fe.net import kernels  # noqa: E402
-from flexnet_fe.net.state import Environment, initial_state, kernel_model, kernel_state  # noqa: E402
-from flexnet_fe.net.timestep import spring_limit  # noqa: E402
-from flexnet_fe.study.net_numpy import NumpyNet, _traction  # noqa: E402
+from flexnet_fe.net.state import initial_state, kernel_state  # noqa: E402
+from flexnet_fe.study.net_numpy import throughput_scene  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).parent))
 from net_kernel_ab import _load  # noqa: E402  (the other kernels.py as a module of its own)
@@ -43,13 +41,7 @@ def _spread(values) -> str:
 
 def compare(other, air: bool, steps: int, repeats: int) -> None:
     """One case (air off or on): prints the medians and the paired ratios' spread."""
-    model = _traction(101)
-    atm = isa(8000.0)
-    env = Environment(np.array([0.0, -atm.gravity, 0.0]), atm.density if air else 0.0, np.zeros(3), air)
-    dt = 0.25 * spring_limit(model)
-    flight = (0.0, 0.0, 3.0 * atm.speed_of_sound)
-    km = kernel_model(model, env)
-    ref = NumpyNet(model, env.gravity, env.rho, env.wind, air)
+    model, km, ref, dt, flight = throughput_scene(101, air)  # net_kernel_throughput's scene
     runs = {"this": lambda s: kernels.advance(km, kernel_state(s), steps, dt),
             "other": lambda s: other.advance(km, kernel_state(s), steps, dt),
             "numpy": lambda s: ref.step(s.x, s.v, dt, steps)}

@@ -162,6 +162,12 @@ def governing(row: dict, fin: str) -> float | None:
     return v if v not in (None, "") else row.get(f"shell.{fin}.{FIN_PEAK}")
 
 
+def largest_fin_stress(row: dict, fins: list[str]) -> float:
+    """The case's largest fin stress [Pa] in a member row: the largest stress any of ``fins`` is
+    held to (:func:`governing`); 0 when none has one."""
+    return max((float(v) for v in (governing(row, f) for f in fins) if v not in (None, "")), default=0.0)
+
+
 def summarise(rows: list[dict], tolerance: float) -> dict[str, Any]:
     """The ensemble's statistics from its member rows (failed members left out and counted):
     ``headlines`` (key → :func:`statistics`), ``fins`` (fin → {"peak": …, "governing": …}),
@@ -183,7 +189,7 @@ def summarise(rows: list[dict], tolerance: float) -> dict[str, Any]:
                                                                                  for r in ok))
                        for k in OUTCOMES if any(_yes(r.get(k)) is not None for r in ok)}
     if fins:
-        out["largest"] = stat(max(float(governing(r, f) or 0.0) for f in fins) for r in ok)
+        out["largest"] = stat(largest_fin_stress(r, fins) for r in ok)
         out["over_allowable"] = _exceed(ok, fins)
     return out
 
@@ -201,8 +207,8 @@ def plot(rows: list[dict], stats: dict, path: Path) -> Path:
     fig, ax = plt.subplots(figsize=(1.1 * len(fins) + 3.0, 4.6))
     for i, fin in enumerate(fins):
         s = stats["largest"] if fin == "largest" else stats["fins"][fin]["governing"]
-        pairs = [(r[LABEL], max(float(governing(r, f) or 0.0) for f in stats["fins"]) if fin == "largest"
-                  else governing(r, fin)) for r in ok]
+        pairs = [(r[LABEL], largest_fin_stress(r, list(stats["fins"])) if fin == "largest" else governing(r, fin))
+                 for r in ok]
         pairs = [(label, float(v)) for label, v in pairs if v not in (None, "")]
         xs = i + np.linspace(-0.18, 0.18, max(len(pairs), 1))[: len(pairs)]
         ax.plot(xs, [1e-6 * v for _, v in pairs], "o", color="C0", ms=4, alpha=0.8)

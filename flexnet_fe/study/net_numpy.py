@@ -106,6 +106,21 @@ def _traction(n_side: int):
     return build_traction(TractionNet(mesh_size=5.0 / (n_side - 1)))
 
 
+def throughput_scene(n_side: int, air: bool):
+    """The scene the net kernel and ``NumpyNet`` are timed on: the traction net with ``n_side``
+    knots per side, Mach 3 at 8 km with gravity, air on/off, dt = ¼ of the spring limit. Returns
+    (model, kernel model, NumpyNet, dt [s], flight velocity (3,) [m/s])."""
+    from flexnet_fe.atmosphere import isa
+    from flexnet_fe.net.state import Environment, kernel_model
+    from flexnet_fe.net.timestep import spring_limit
+
+    model = _traction(n_side)
+    atm = isa(8000.0)
+    env = Environment(np.array([0.0, -atm.gravity, 0.0]), atm.density if air else 0.0, np.zeros(3), air)
+    return (model, kernel_model(model, env), NumpyNet(model, env.gravity, env.rho, env.wind, air),
+            0.25 * spring_limit(model), (0.0, 0.0, 3.0 * atm.speed_of_sound))
+
+
 def net_kernel_throughput(n_side: int, air: bool, steps: int, repeats: int = 5) -> dict:
     """Time per spring-step [ns] of the production kernel (``net.kernels.advance``) and of
     ``NumpyNet`` on the traction net with ``n_side`` knots per side, air on/off, from the same
@@ -115,18 +130,10 @@ def net_kernel_throughput(n_side: int, air: bool, steps: int, repeats: int = 5) 
 
     Returns {ns_per_spring_step_kernel, ns_per_spring_step_numpy, ratio (numpy / kernel),
     n_springs, n_nodes, steps, repeats, max_dx_m (|x_kernel − x_numpy| after the timed steps)}."""
-    from flexnet_fe.atmosphere import isa
     from flexnet_fe.net.kernels import advance
-    from flexnet_fe.net.state import Environment, initial_state, kernel_model, kernel_state
-    from flexnet_fe.net.timestep import spring_limit
+    from flexnet_fe.net.state import initial_state, kernel_state
 
-    model = _traction(n_side)
-    atm = isa(8000.0)
-    env = Environment(np.array([0.0, -atm.gravity, 0.0]), atm.density if air else 0.0, np.zeros(3), air)
-    dt = 0.25 * spring_limit(model)
-    flight = (0.0, 0.0, 3.0 * atm.speed_of_sound)
-    km = kernel_model(model, env)
-    ref = NumpyNet(model, env.gravity, env.rho, env.wind, air)
+    model, km, ref, dt, flight = throughput_scene(n_side, air)
     advance(km, kernel_state(initial_state(model, flight)), 1, dt)  # compile / load the cache
     t_nb, t_np = [], []
     for _ in range(repeats):
