@@ -127,7 +127,7 @@ from numba import njit
 from flexnet_fe.collide.air import segment_air
 from flexnet_fe.collide.fpu import FTZ_DAZ, get_mxcsr, set_mxcsr
 from flexnet_fe.collide.model import (A_AIR_PAID, A_BROKEN, A_CROSS, A_DAMP_CAPPED, A_DAMP_POINTS,
-                                      A_DISS_CONTACT, A_DISS_FRICTION, A_DISS_ROPE,
+                                      A_DISS_CONTACT, A_DISS_FRICTION, A_DISS_ROPE, A_FIN_WORK, A_TIME,
                                       A_FAST_SEG_STEPS, A_FCONTACT, A_IMP_B, A_NBROKEN, A_NCONTACT, A_PEN,
                                       A_PEN_INT, A_PEN_RATIO, A_PHELD, A_SKIPPED, A_TUN_PART, A_TUN_SPEED,
                                       A_TUN_STEP, A_U_CONTACT, A_WORK_GRAVITY, FAR, NONFINITE, OK,
@@ -193,7 +193,9 @@ class StepWork(NamedTuple):
     must evaluate every segment (a new work, or the last split re-evaluated more than
     REFRESH_SHARE of them), [1] the full splits made; win (1,) int64 the steps left in the open
     window (0: none; a window may span calls, ``advance_kept``'s horizon). Single rate (ratio 1):
-    every segment and node fast, dfar inf."""
+    every segment and node fast, dfar inf.
+    sv (1,) [m/s]: the prescribed normal speed ẇ of the fin surface under the current contact point
+    (``_point_depth``; 0 for rigid fins and the body)."""
 
     r: np.ndarray
     w_w: np.ndarray
@@ -224,6 +226,7 @@ class StepWork(NamedTuple):
     cmask: np.ndarray
     refresh: np.ndarray
     win: np.ndarray
+    sv: np.ndarray
 
 
 @njit(cache=True)
@@ -250,17 +253,27 @@ def _fin_half_spaces(model):
 
 
 @njit(cache=True)
+def _fin_reach(model):
+    """(nf,) [m] rope radius + each fin's half-thickness (+ its largest prescribed |w|, a moving fin):
+    the distance from a fin's undeformed core within which a rope centre line may touch it."""
+    rh = model.fin_half + model.rope_radius
+    if model.fin_wmax.shape[0] > 0:
+        rh = rh + model.fin_wmax
+    return rh
+
+
+@njit(cache=True)
 def _work(model, n):
     """A new scratch for ``n`` nodes; the candidate list is empty and every node's margin 0, so the
     first step builds it; every segment and node is fast (single rate); the first split is full."""
     ns = model.seg.shape[0]
     return StepWork(np.eye(3), np.zeros(3), np.zeros((n, 3)), np.zeros(6), np.zeros((n, 3)), np.zeros(3),
                     np.zeros(3), np.zeros(ns, np.int64), np.zeros(2, np.int64), np.zeros((n, 3)), np.zeros(n),
-                    _fin_half_spaces(model), model.fin_half + model.rope_radius, np.zeros((n, 6)), np.zeros(12),
+                    _fin_half_spaces(model), _fin_reach(model), np.zeros((n, 6)), np.zeros(12),
                     np.arange(ns), np.zeros(ns, np.int64), np.arange(n), np.array([ns, 0, n]),
                     np.ones(n, np.bool_), np.zeros((n, 3)), np.full(n, np.inf), np.zeros(ns), np.zeros((n, 3)),
                     np.zeros(n), np.zeros(ns, np.bool_), np.zeros(ns, np.int64), np.array([1, 0]),
-                    np.zeros(1, np.int64))
+                    np.zeros(1, np.int64), np.zeros(1))
 
 
 @njit(cache=True)
@@ -285,9 +298,9 @@ def _measure_work(model, pbn):
     measurement once per output interval)."""
     e1, e2, i1 = np.zeros((0, 3)), np.zeros(0), np.zeros(0, np.int64)
     return StepWork(np.eye(3), np.zeros(3), e1, np.zeros(6), pbn, np.zeros(3), np.zeros(3), i1, np.zeros(2, np.int64),
-                    e1, e2, _fin_half_spaces(model), model.fin_half + model.rope_radius, np.zeros((0, 6)),
+                    e1, e2, _fin_half_spaces(model), _fin_reach(model), np.zeros((0, 6)),
                     np.zeros(12), i1, i1, i1, np.zeros(3, np.int64), np.zeros(0, np.bool_), e1, e2, e2, e1, e2,
-                    np.zeros(0, np.bool_), i1, np.zeros(2, np.int64), np.zeros(1, np.int64))
+                    np.zeros(0, np.bool_), i1, np.zeros(2, np.int64), np.zeros(1, np.int64), np.zeros(1))
 
 
 @njit(cache=True, _nrt=False)
@@ -547,6 +560,12 @@ def _apply(model, state, wk, slot, fin, pt, dt, law):
     vr0 = w * v[i, 0] + s * v[j, 0] - mv[0] - (w_w[1] * l2 - w_w[2] * l1)
     vr1 = w * v[i, 1] + s * v[j, 1] - mv[1] - (w_w[2] * l0 - w_w[0] * l2)
     vr2 = w * v[i, 2] + s * v[j, 2] - mv[2] - (w_w[0] * l1 - w_w[1] * l0)
+    sn = wk.sv[0] if fin >= 0 else 0.0  # a moving fin's surface speed along its normal
+    s0, s1, s2 = 0.0, 0.0, 0.0
+    if sn != 0.0:
+        ax2 = model.fin_axes[fin, 2]
+        s0, s1, s2 = _rv(r, sn * ax2[0], sn * ax2[1], sn * ax2[2])
+        vr0, vr1, vr2 = vr0 - s0, vr1 - s1, vr2 - s2
     vn = vr0 * nw0 + vr1 * nw1 + vr2 * nw2
     ddot = -vn
     vk = approach_speed(state.vk[slot], ddot, model.v_floor)
@@ -574,6 +593,8 @@ def _apply(model, state, wk, slot, fin, pt, dt, law):
     _take_wrench(wk.md, 0, (l0, l1, l2), (fd0, fd1, fd2))
     _take_wrench(wk.md, 6, (l0, l1, l2), (ft0, ft1, ft2))
     _take_wrench(fmt, 0, (l0, l1, l2), (f0, f1, f2))
+    if sn != 0.0:  # the moving surface's work on the rope (external: the energy balance books it)
+        state.acc[A_FIN_WORK] += (f0 * s0 + f1 * s1 + f2 * s2) * dt
     state.acc[A_DISS_CONTACT] += (fn - fel) * ddot * dt
     state.acc[A_DISS_FRICTION] -= (ft0 * vt0 + ft1 * vt1 + ft2 * vt2) * dt
     state.part_imp[fin + 1, 0] += fn * dt
@@ -597,18 +618,58 @@ def _apply(model, state, wk, slot, fin, pt, dt, law):
     return fmag
 
 
+@njit(cache=True, inline="always")
+def _bilinear(w, r, i, j, a, b):
+    """Row r of the sampled field w (rows, nu, nv) at cell (i, j), local coordinates (a, b) ∈ [0, 1]²."""
+    return ((1.0 - a) * ((1.0 - b) * w[r, i, j] + b * w[r, i, j + 1])
+            + a * ((1.0 - b) * w[r, i + 1, j] + b * w[r, i + 1, j + 1]))
+
+
+@njit(cache=True, _nrt=False)
+def _fin_motion(model, fin, pu, pv, t):
+    """(w [m], ẇ [m/s]) of fin ``fin``'s prescribed normal displacement (``model.FinMotion``) at its
+    planform point (pu, pv) [m] and time t [s]: bilinear on the fin's grid (clamped to it), linear in
+    t between samples (ẇ the interval's slope); 0 before the first sample, the last one held after."""
+    nt = model.fin_motion_nt[fin]
+    tau = (t - model.fin_motion_t0[fin]) / model.fin_motion_dt
+    if nt == 0 or tau < 0.0:
+        return 0.0, 0.0
+    g, w = model.fin_motion_grid[fin], model.fin_motion_w
+    nu, nv = w.shape[1], w.shape[2]
+    x = min(max((pu - g[0]) / g[1], 0.0), nu - 1.0)
+    y = min(max((pv - g[2]) / g[3], 0.0), nv - 1.0)
+    i, j = min(int(x), nu - 2), min(int(y), nv - 2)
+    a, b = x - i, y - j
+    r = model.fin_motion_offset[fin] + min(int(tau), nt - 1)
+    w0 = _bilinear(w, r, i, j, a, b)
+    if tau >= nt - 1:  # at or past the last sample: held
+        return w0, 0.0
+    w1 = _bilinear(w, r + 1, i, j, a, b)
+    c = tau - int(tau)
+    return (1.0 - c) * w0 + c * w1, (w1 - w0) / model.fin_motion_dt
+
+
 @njit(cache=True, inline="always")  # (module docstring: call cost)
-def _point_depth(model, wk, fin, p0, p1, p2):
-    """Penetration δ [m] of the rope's cross-section centred at (p0, p1, p2) [m] (B) into part
-    ``fin`` (−1: the body), with wk.nb its unit normal (towards the rope) and wk.qb the part's
-    surface point under it; δ ≤ 0: apart (nb, qb then undefined), and 0 when the centre is on the
-    core (a crossing: booked per segment as tunnelling)."""
+def _point_depth(model, wk, fin, p, t):
+    """Penetration δ [m] of the rope's cross-section centred at p = (p0, p1, p2) [m] (B) into part
+    ``fin`` (−1: the body) at time t [s], with wk.nb its unit normal (towards the rope), wk.qb the
+    part's surface point under it and wk.sv the surface's prescribed normal speed there (a moving
+    fin, ``_fin_motion``: its core shifted by w along its normal n, the shift read at p's projection
+    on the planform — first order in the fin's slope); δ ≤ 0: apart (nb, qb then undefined), and 0
+    when the centre is on the core (a crossing: booked per segment as tunnelling)."""
+    p0, p1, p2 = p
     nb, qb = wk.nb, wk.qb
     if fin < 0:
         d, nb[0], nb[1], nb[2], qb[0], qb[1], qb[2], _ = body_closest_scalar(
             (p0, p1, p2), model.prof_kind, model.prof_data, model.prof_part)
         return model.rope_radius - d if d > 0.0 else 0.0
     o, ax, half = model.fin_origin[fin], model.fin_axes[fin], model.fin_half[fin]
+    wf = 0.0
+    if model.fin_motion_nt.shape[0] > 0:
+        du0, du1, du2 = p0 - o[0], p1 - o[1], p2 - o[2]
+        wf, wk.sv[0] = _fin_motion(model, fin, du0 * ax[0, 0] + du1 * ax[0, 1] + du2 * ax[0, 2],
+                                   du0 * ax[1, 0] + du1 * ax[1, 1] + du2 * ax[1, 2], t)
+        p0, p1, p2 = p0 - wf * ax[2, 0], p1 - wf * ax[2, 1], p2 - wf * ax[2, 2]
     dist, qu, qv = point_core_closest((p0, p1, p2), o, ax, model.fin_core[fin, :model.fin_ncore[fin]])
     if dist <= 0.0:
         return 0.0
@@ -617,6 +678,8 @@ def _point_depth(model, wk, fin, p0, p1, p2):
     c2 = o[2] + qu * ax[0, 2] + qv * ax[1, 2]
     nb[0], nb[1], nb[2] = (p0 - c0) / dist, (p1 - c1) / dist, (p2 - c2) / dist
     qb[0], qb[1], qb[2] = c0 + half * nb[0], c1 + half * nb[1], c2 + half * nb[2]
+    if wf != 0.0:  # the surface point where the fin is
+        qb[0], qb[1], qb[2] = qb[0] + wf * ax[2, 0], qb[1] + wf * ax[2, 1], qb[2] + wf * ax[2, 2]
     return model.rope_radius + half - dist
 
 
@@ -643,7 +706,8 @@ def _line_grid(model, state, wk, slot, fin, geo, dt, apply):
         q = qr if step == 1 else qr - 1
         while 0 <= q < n:
             s = (q + 0.5) / n
-            delta = _point_depth(model, wk, fin, pa[0] + s * t0, pa[1] + s * t1, pa[2] + s * t2)
+            delta = _point_depth(model, wk, fin, (pa[0] + s * t0, pa[1] + s * t1, pa[2] + s * t2),
+                                 state.acc[A_TIME])
             if delta <= 0.0:
                 break
             touched = True
@@ -811,14 +875,14 @@ def segment_contacts(model, state, wk, segs, masks, dt, apply, step):
             for k in range(3):
                 qb[k] = model.fin_origin[fi, k] + qu * ax[0, k] + qv * ax[1, k]
             half = model.fin_half[fi]
-            if crossed:
+            if crossed:  # (the undeformed core: a moving fin's |w| < r + h/2, model.with_fin_motion)
                 if qb[1] * qb[1] + qb[2] * qb[2] < model.bbox[3] * model.bbox[3]:
                     continue  # through the root extension, i.e. inside the body: booked by the body above
                 if apply and _tunnel(model, state, slot, FIN_PART_OFFSET + fi, s, step) == TUNNEL:
                     return energy + u_e, TUNNEL, ncon
                 continue
             delta = rad + half - dist
-            if delta <= 0.0:
+            if wk.fin_rh[fi] - dist <= 0.0:  # (fin_rh = r + h/2 (+ a moving fin's largest |w|): ≡ delta ≤ 0 if rigid)
                 if apply:
                     state.vk[slot] = 0.0
                 continue
@@ -1162,6 +1226,7 @@ def _fine_step(model, state, wk, dt, step, mv0, air):
         mv0[k] = state.mv[k]
     _integrate(model, state, wk, dt)
     _book_mean_velocity(model, state, wk, mv0, dt)
+    acc[A_TIME] += dt
     if not (np.isfinite(state.mx[0]) and np.isfinite(state.mv[2])):
         return NONFINITE
     return OK
@@ -1294,7 +1359,7 @@ def fin_gaps(model, state):
         return out
     pbn = _body_positions(model, state)
     fin_pl = _fin_half_spaces(model)
-    fin_rh = model.fin_half + model.rope_radius
+    fin_rh = _fin_reach(model)
     for e in range(ns):
         if not state.alive[e]:
             continue

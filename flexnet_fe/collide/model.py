@@ -38,7 +38,9 @@ A_AIR_PAID = 28  # far net: time the last air impulses covered beyond the curren
 A_REFINE = 29  # energy taken out by cutting rope pieces during the run, −ΔE, whole run [J] (collide.adapt)
 A_DAMP_POINTS = 30  # contact point-steps with a force (each point of the line law counts), whole run
 A_DAMP_CAPPED = 31  # of those, the point-steps whose dashpot was capped at the explicit step (contact.law.normal_force)
-N_ACC = 32
+A_TIME = 32  # time of the state [s]: set by the caller before each call, advanced by dt per step (prescribed fin motion)
+A_FIN_WORK = 33  # work of the prescribed fin motion on the rope, Σ F·v_surface dt, whole run [J] (0 with rigid fins)
+N_ACC = 34
 
 # -- status codes of ``kernel.advance`` ---------------------------------------------------------
 OK, TUNNEL, NONFINITE, FAR = 0, 1, 2, 3
@@ -77,6 +79,10 @@ class CollideModel(NamedTuple):
         each segment by the midpoint rule on points h apart (``kernel._line_contact``);
         kl_body, kl_fin (nf,) [N/m²] k_l per part; line_h_body, line_h_fin (nf,) [m] the spacing h
         per part. False: Eq. (28) once per segment at its closest point (``contact_law = "segment"``).
+    Prescribed fin motion (the one-way check, ``FinMotion``; line law only; empty: rigid fins):
+        fin_motion_t0 (nf,) [s], fin_motion_dt [s], fin_motion_nt (nf,), fin_motion_offset (nf + 1,),
+        fin_motion_grid (nf, 4) [m], fin_motion_w (rows, nu, nv) [m] as ``FinMotion``'s fields;
+        fin_wmax (nf,) [m] each fin's largest |w| (the broad phase's bounds widen by it).
     """
 
     seg: np.ndarray
@@ -121,6 +127,53 @@ class CollideModel(NamedTuple):
     kl_fin: np.ndarray = np.zeros(0)
     line_h_body: float = np.inf
     line_h_fin: np.ndarray = np.zeros(0)
+    fin_motion_t0: np.ndarray = np.zeros(0)
+    fin_motion_dt: float = 1.0
+    fin_motion_nt: np.ndarray = np.zeros(0, np.int64)
+    fin_motion_offset: np.ndarray = np.zeros(0, np.int64)
+    fin_motion_grid: np.ndarray = np.zeros((0, 4))
+    fin_motion_w: np.ndarray = np.zeros((0, 2, 2))
+    fin_wmax: np.ndarray = np.zeros(0)
+
+
+class FinMotion(NamedTuple):
+    """A prescribed normal displacement w(u, v, t) of each fin's mid-surface (the one-way check,
+    ``study.one_way``: sampled from the shell stage's run under a rigid collision's loads, then
+    imposed on a second collision). Fins in the order of ``missile.fins``; fin f's frame is
+    ``missile.shapes`` fin_origin / fin_axes (e1 = u, e2 = v, n).
+
+    t0 (nf,) [s] time of fin f's first sample; dt [s] sample interval (all fins); nt (nf,) int64
+    samples of fin f (0: rigid); offset (nf + 1,) int64: fin f's samples are rows
+    offset[f]:offset[f + 1] of w; grid (nf, 4) [m] (u0, du, v0, dv): grid point (i, j) at
+    origin + (u0 + i du) e1 + (v0 + j dv) e2; w (rows, nu, nv) [m] along n, row offset[f] + k at
+    t0[f] + k dt. Between samples w is linear in t (so ẇ is constant over each interval),
+    bilinear in (u, v), clamped to the grid; 0 before t0 (the fin at rest), the last sample held
+    after the last (ẇ = 0)."""
+
+    t0: np.ndarray
+    dt: float
+    nt: np.ndarray
+    offset: np.ndarray
+    grid: np.ndarray
+    w: np.ndarray
+
+
+def with_fin_motion(km: CollideModel, m: FinMotion) -> CollideModel:
+    """``km`` with the fins moving as ``m`` (kernel arrays; the line contact law only: ``_point_depth``)."""
+    nf = km.fin_half.shape[0]
+    if not km.line_law:
+        raise ValueError("a prescribed fin motion needs collide.contact_law = 'line'")
+    if len(m.nt) != nf or m.grid.shape != (nf, 4) or len(m.offset) != nf + 1 or m.w.shape[0] != m.offset[-1]:
+        raise ValueError(f"fin motion: arrays for {len(m.nt)} fins do not match the missile's {nf}")
+    if m.w.shape[1] < 2 or m.w.shape[2] < 2 or not m.dt > 0.0:
+        raise ValueError("fin motion: the grid needs at least 2 x 2 points and dt > 0")
+    wmax = np.array([float(np.abs(m.w[m.offset[f]:m.offset[f + 1]]).max(initial=0.0)) for f in range(nf)])
+    if (wmax >= km.rope_radius + km.fin_half).any():  # the crossing test reads the undeformed core
+        raise ValueError(f"fin motion: |w| up to {1e3 * wmax.max():.3g} mm reaches rope radius + half-thickness")
+    return km._replace(fin_motion_t0=np.asarray(m.t0, np.float64), fin_motion_dt=float(m.dt),
+                       fin_motion_nt=np.asarray(m.nt, np.int64), fin_motion_offset=np.asarray(m.offset, np.int64),
+                       fin_motion_grid=np.ascontiguousarray(m.grid, np.float64),
+                       fin_motion_w=np.ascontiguousarray(m.w, np.float64), fin_wmax=wmax)
 
 
 class CollideState(NamedTuple):

@@ -105,7 +105,7 @@ ENERGY_GROWTH_SAMPLES = 3
 ENERGY_COLUMNS = ("missile_kinetic_j", "net_kinetic_j", "rope_elastic_j", "contact_stored_j", "rope_damping_j",
                   "contact_damping_j", "friction_j", "dissipated_air_j", "broken_release_j", "rope_refinement_j",
                   "gravity_work_j",
-                  "crop_boundary_work_j", "step_term_j", "energy_balance_j")
+                  "crop_boundary_work_j", "fin_motion_work_j", "step_term_j", "energy_balance_j")
 HISTORY_COLUMNS = (
     "t_s", "accel_body_x_mps2", "accel_body_y_mps2", "accel_body_z_mps2", "accel_mag_mps2",
     "omega_body_x_rps", "omega_body_y_rps", "omega_body_z_rps", "alpha_body_x_rps2", "alpha_body_y_rps2",
@@ -263,13 +263,14 @@ def _energy_terms(km: M.CollideModel, st: M.CollideState, missile: Missile, iner
             "friction_j": acc[M.A_DISS_FRICTION], "dissipated_air_j": acc[M.A_DISS_AIR],
             "broken_release_j": acc[M.A_BROKEN], "rope_refinement_j": acc[M.A_REFINE],
             "gravity_work_j": acc[M.A_WORK_GRAVITY], "crop_boundary_work_j": 0.0,
+            "fin_motion_work_j": acc[M.A_FIN_WORK],
             "step_term_j": _step_term(km, st, dt)}
 
 
 def _balance(e: dict) -> float:
-    """Stored + dissipated − external work [J]."""
-    return (sum(v for k, v in e.items() if k not in ("gravity_work_j", "crop_boundary_work_j"))
-            - e["gravity_work_j"] - e["crop_boundary_work_j"])
+    """Stored + dissipated − external work [J] (gravity, the crop boundary, a prescribed fin motion)."""
+    external = ("gravity_work_j", "crop_boundary_work_j", "fin_motion_work_j")
+    return sum(v for k, v in e.items() if k not in external) - sum(e[k] for k in external)
 
 
 def _take_fin_events(km: M.CollideModel, st: M.CollideState):
@@ -308,14 +309,17 @@ def _stop_message(status, st, cfg, t, names, setup, dt) -> str:
 
 def simulate(net: HeldNet, missile: Missile, cfg: CollideConfig, gravity: float,
              log: logging.Logger, *, air_density: float | None = None, crop: bool | None = None,
-             n_snapshots: int | None = None, dt_scale: float = 1.0) -> CollisionResult:
+             n_snapshots: int | None = None, dt_scale: float = 1.0,
+             fin_motion: M.FinMotion | None = None) -> CollisionResult:
     """Run the impact of ``missile`` on the held ``net`` per ``cfg`` (gravity g [m/s²] used only
     if ``cfg.gravity``; air_density ρ [kg/m³], the [atmosphere]'s, needed and used only if
     ``cfg.air``). The rope near the path is first split per ``cfg.rope_split``, then cut to
     ``cfg.fin_piece_length`` near the fins (``collide.refine``; the result's ``net`` is the split net),
     and with ``cfg.fin_piece_chord`` the rope is cut again during the run where it presses on a fin
     or is about to (``collide.adapt``; summary ``cut_segments``, ``cut_nodes``, ``rope_refinement_j``). Keyword overrides (tests,
-    convergence studies): crop, n_snapshots, dt_scale (the chosen dt is multiplied by it).
+    convergence studies): crop, n_snapshots, dt_scale (the chosen dt is multiplied by it); fin_motion: the fins'
+    mid-surfaces move as prescribed (``model.FinMotion``: the one-way check, ``study.one_way``; its work on
+    the rope is the history's ``fin_motion_work_j``).
 
     End rule: the run lasts at least ``cfg.duration``; from then on it stops at the first output
     time at which the interaction is over (:func:`interaction_over`: no contact in the last
@@ -332,6 +336,8 @@ def simulate(net: HeldNet, missile: Missile, cfg: CollideConfig, gravity: float,
                            "air_density)")
     net = refine_near_fins(split_near_path(net, missile, cfg), missile, cfg)
     setup = build(net, missile, cfg, gravity, log, cfg.crop if crop is None else crop, air_density or 0.0)
+    if fin_motion is not None:
+        setup = replace(setup, model=M.with_fin_motion(setup.model, fin_motion))
     km, start, step = setup.model, setup.start, setup.step
     n_sub, dt = _sub_steps(cfg, step.dt * dt_scale)
     ratio = min(far_ratio(cfg, step.dt_spring, dt, step.dt_contact if setup.model.line_law else math.inf),
@@ -580,6 +586,7 @@ def _drive(d: _Drive, n_min: int, n_max: int, snap_at: set, log) -> _Run:
             gather = _Interval()
             pressed, chords = [], []
             for j in range(cfg.loads_per_output):
+                st.acc[M.A_TIME] = (k - 1) * cfg.output_interval + j * cfg.load_dt
                 status = K.advance_kept(km, st, wk, n_sub, dt, ratio, n_sub * (cfg.loads_per_output - j))
                 run.steps += n_sub
                 run.dt_min = min(run.dt_min, dt)

@@ -102,8 +102,9 @@ def deploy_dir(ctx: Context, net_overrides: tuple[str, ...] = ()):
     return ctx.cache[key]
 
 
-def simulate_case(case, ddir, log=LOG):
-    """(held net, missile, CollisionResult) of one case's impact (no files written)."""
+def simulate_case(case, ddir, log=LOG, fin_motion=None):
+    """(held net, missile, CollisionResult) of one case's impact (no files written); fin_motion: the
+    fins moving as prescribed (``collide.model.FinMotion``, the one-way check)."""
     from flexnet_fe.collide.scene import held_net
     from flexnet_fe.collide.simulate import simulate
     from flexnet_fe.missile.build import build_missile
@@ -111,7 +112,8 @@ def simulate_case(case, ddir, log=LOG):
     net = held_net(case.net, case.collide.net_source, ddir)
     missile = build_missile(case.missile)
     air = isa(case.atmosphere.altitude)
-    res = simulate(net, missile, case.collide, air.gravity, log, air_density=air.density, n_snapshots=2)
+    res = simulate(net, missile, case.collide, air.gravity, log, air_density=air.density, n_snapshots=2,
+                   fin_motion=fin_motion)
     return net, missile, res
 
 

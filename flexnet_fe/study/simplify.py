@@ -1,10 +1,10 @@
 """Simplifications table (issue 15 §3): the same headline numbers with and without each
 simplification the code can switch, their difference and cost, flagged above 2 %.
 
-Built from the accuracy rows of the stage studies on the page, the one-way (rigid-fin) check
-from the shell study's largest fin displacement, and measurements of its own: air off vs on
-during the collision (:func:`air_rows`, the collide study's scene run side by side) and, in the
-full study, the bound on the one-way fin loading (``study.one_way``)."""
+Built from the accuracy rows of the stage studies on the page and measurements of its own: air
+off vs on during the collision (:func:`air_rows`, the collide study's scene run side by side) and,
+in the full study, the one-way fin loading against the collision run again with the fins moving as
+the shell computed (``study.one_way``)."""
 
 from __future__ import annotations
 
@@ -12,10 +12,6 @@ import math
 
 from flexnet_fe.study.common import HEADLINE_TOLERANCE, Context, measured, rel_error
 from flexnet_fe.study.scenes import CASE, FULL_COLLIDE, QUICK_COLLIDE, case_with
-
-ROPE_RADIUS_M = 4.5e-3 / 2
-"""cases/radar_traction's rope radius [m] (net.rope_diameter / 2)."""
-
 
 def _pair(rows, stage, knob, value, label, without) -> list[dict]:
     """Rows comparing the default (with the simplification) with the variant ``knob = value``."""
@@ -114,15 +110,6 @@ def rows(stage_rows: list[dict], notes: list[str], ctx: Context | None = None) -
     for v in (2, 3):
         out += _pair(stage_rows, "deploy", "net.subdivisions", v, "lumped ropes (one segment per bar)",
                      f"net.subdivisions = {v}")
-    shell_d = next((r for r in stage_rows if r["stage"] == "shell" and r["is_default"]), None)
-    if shell_d is not None and math.isfinite(shell_d.get("max_abs_u_m", math.nan)):
-        u = shell_d["max_abs_u_m"]
-        ratio = u / ROPE_RADIUS_M
-        out.append({"simplification": "rigid fins in the collision (one-way loading)",
-                    "without": "elastic fins (not coupled in the code)", "stage": "shell",
-                    "headline": "max fin displacement / rope radius", "with_value": 0.0,
-                    "without_value": u, "difference_rel": ratio, "cost_with_s": math.nan,
-                    "cost_without_s": math.nan, "matters": bool(ratio > HEADLINE_TOLERANCE)})
     if not any(r["simplification"].startswith("lumped ropes near") for r in out):
         notes.append("lumped vs split ropes near contact: the collide record on this page has no "
                      "collide.rope_split rows (measured before the knob existed) — re-run `flexnet study "
@@ -134,7 +121,6 @@ def rows(stage_rows: list[dict], notes: list[str], ctx: Context | None = None) -
         out += one_way.rows(ctx, notes)
     else:
         notes.append("air off vs on during the collision: not measured in this call (no study context)")
-    notes.append("rigid missile in the collision: no elastic-missile model exists — not measured; the "
-                 "one-way check compares the shell stage's largest fin displacement with the rope "
-                 "radius (a fin that moves by a good part of the rope radius would change the contact)")
+    notes.append("rigid missile body in the collision: no elastic-body model exists — not measured (the "
+                 "fins' elasticity is: the one-way rows)")
     return out

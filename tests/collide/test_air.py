@@ -98,8 +98,8 @@ def test_impact_with_air_closes_energy_and_momentum_from_its_history(radar, log,
     assert np.linalg.norm(air[-1]) > 1e-4 * dp
     terms = [c for c in h if c.endswith("_j") and c != "energy_balance_j"]
     assert "dissipated_air_j" in terms
-    total = sum(h[c] for c in terms if c not in ("gravity_work_j", "crop_boundary_work_j")) \
-        - h["gravity_work_j"] - h["crop_boundary_work_j"]
+    external = ("gravity_work_j", "crop_boundary_work_j", "fin_motion_work_j")  # work done on the system
+    total = sum(h[c] for c in terms if c not in external) - sum(h[c] for c in external)
     np.testing.assert_allclose(h["energy_balance_j"], total - total[0], atol=1e-9 * total[0])
     exchanged = h["missile_kinetic_j"][0] - h["missile_kinetic_j"].min()
     assert np.abs(h["energy_balance_j"]).max() <= 5e-3 * exchanged

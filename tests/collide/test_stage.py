@@ -52,8 +52,8 @@ def test_stage_writes_its_files(tmp_path):
     assert np.abs(p - p[0]).max() < 1e-9 * np.abs(h["missile_momentum_z_ns"][0] - h["missile_momentum_z_ns"][-1])
     # energy closes from the file: energy_balance_j is the sum of its terms minus its initial value
     terms = [c for c in h if c.endswith("_j") and c != "energy_balance_j"]
-    total = sum(h[c] for c in terms if c not in ("gravity_work_j", "crop_boundary_work_j")) \
-        - h["gravity_work_j"] - h["crop_boundary_work_j"]
+    external = ("gravity_work_j", "crop_boundary_work_j", "fin_motion_work_j")  # work done on the system
+    total = sum(h[c] for c in terms if c not in external) - sum(h[c] for c in external)
     np.testing.assert_allclose(h["energy_balance_j"], total - total[0], atol=1e-9 * total[0])
     exchanged = h["missile_kinetic_j"][0] - h["missile_kinetic_j"].min()
     assert np.abs(h["energy_balance_j"]).max() <= 5e-3 * exchanged  # issue 9: 0.5 % of the energy exchanged
