@@ -60,7 +60,7 @@ def lobes(run_dir: Path, fin: str, hl: float, a) -> dict:
                (s.split(":") for s in a.sectors.split(";"))}
     with tempfile.TemporaryDirectory() as td:
         spec = next(s for s in _specs(run_dir, case, Path(td)) if s.name == fin)
-        job = S._setup_fin(shell, spec, contacts, acc_t, acc, Path(td), a.end_time,
+        job = S.setup_fin(shell, spec, contacts, acc_t, acc, Path(td), a.end_time,
                            logging.getLogger("lobes"), MPI.COMM_WORLD)
         x = job.model.op.x_nodes
         r_ex = float(job.zones.radius.max())

@@ -575,7 +575,7 @@ def fin_material(spec: FinSpec, shell: ShellConfig) -> ShellMaterial:
                          yield_strength=spec.yield_strength, shear_correction=shell.shear_correction)
 
 
-def _setup_fin(shell: ShellConfig, spec: FinSpec, contacts: FinContacts, acc_t, acc,
+def setup_fin(shell: ShellConfig, spec: FinSpec, contacts: FinContacts, acc_t, acc,
                stage_dir: Path, end_time: float, log, comm) -> FinJob:
     """Mesh, model, loads, St-Venant zones, window and output of one fin (serial, dolfinx)."""
     idx = contacts.fin_names.index(spec.name) if spec.name in contacts.fin_names else -1
@@ -725,7 +725,7 @@ def rerun_fins(shell: ShellConfig, runs: Iterable[tuple[FinSpec, FinContacts, Pa
     with progress_bar(0, title) as bar:
         def set_up():
             for spec, contacts, folder, end in runs:
-                job = _setup_fin(shell.model_copy(update={"end_time": end}), spec, contacts, *accel, folder, end,
+                job = setup_fin(shell.model_copy(update={"end_time": end}), spec, contacts, *accel, folder, end,
                                  log, comm)
                 with IO_LOCK:
                     bar.total += job.steps.n_steps
@@ -828,7 +828,9 @@ def check_strikes(shell: ShellConfig, specs: list[FinSpec], fin_res: list[dict],
             "peak_locations_m": [m["peak_location_m"] for _, m in mine], "end_time_s": ends[i]}
 
 
-def _end_time(shell: ShellConfig, contacts: FinContacts, acc_t: np.ndarray) -> float:
+def stage_end_time(shell: ShellConfig, contacts: FinContacts, acc_t: np.ndarray) -> float:
+    """The stage's end [s]: ``shell.end_time``, else the last contact sample or body-acceleration
+    row (or given pressure time) + ``shell.end_margin``."""
     last = max(contacts.t[-1] if len(contacts.t) else 0.0, acc_t[-1] if len(acc_t) else 0.0,
                shell.load.times[-1] if shell.load is not None else 0.0)
     end_time = shell.end_time or last + shell.end_margin
@@ -865,7 +867,7 @@ def run_shell(shell: ShellConfig, fins: list[FinSpec], contacts_npz: Path,
     if contacts.fin.size and shell.bearing_rope_modulus is None:
         raise CaseError("[shell]", "bearing_rope_modulus", "not given, and no [net] table to take the rope's "
                                                            "contact modulus from; the fins have contact loads")
-    end_time = _end_time(shell, contacts, acc_t)
+    end_time = stage_end_time(shell, contacts, acc_t)
     specs = select_fins(shell, fins, contacts)
     workers = 1 if comm.size > 1 else min(shell.workers or cpu_count(), max(len(specs), 1))
     log.info("shell: %d fins, their loops on %d thread(s), each as soon as its fin is set up", len(specs),
@@ -875,7 +877,7 @@ def run_shell(shell: ShellConfig, fins: list[FinSpec], contacts_npz: Path,
     with progress_bar(0, f"shell ({len(specs)} fins, {workers} thread(s))") as bar:
         def set_up():
             for spec in specs:
-                job = _setup_fin(shell, spec, contacts, acc_t, acc, stage_dir, end_time, log, comm)
+                job = setup_fin(shell, spec, contacts, acc_t, acc, stage_dir, end_time, log, comm)
                 jobs.append(job)
                 t_setup[0] = time.perf_counter()
                 with IO_LOCK:
