@@ -6,10 +6,9 @@ same mesh, window, step and loads), with one addition: at every history sample (
 ``shell.history_interval``, set to the requested interval) the displacement's component along the
 fin's normal n is taken at the nodes and interpolated onto a regular nu × nv grid over the fin's
 contact polygon (root extension included: ``missile.shapes.pack_shapes``). The grid values are
-linear on a Delaunay triangulation of the nodes' planform coordinates (exact for a linear field; the
-shell's bilinear cells differ from it by O(h² w''), far below the 1–5 mm rope radius scale the
-kernel reads it at), and a grid point outside the mesh (the root extension inside the body, the
-rounded tip corners) takes its nearest node's value (≈ 0 at the clamped root). The samples are
+the shell's own bilinear field (the cell each point lies in, located and pulled back as the load
+transfer does: ``shell.transfer``), and a grid point outside the mesh (the root extension inside
+the body, the rounded tip corners) takes its nearest node's value (≈ 0 at the clamped root). The samples are
 then resampled linearly in time onto t0 + k·interval (t0: the fin's window start; the stage's
 frames fall on steps, ≈ interval apart, plus each running peak's instant).
 """
@@ -22,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 from scipy import sparse
-from scipy.spatial import Delaunay, cKDTree
+from scipy.spatial import cKDTree
 
 from flexnet_fe.collide.model import FinMotion
 from flexnet_fe.shell.forms import NDOF_NODE
@@ -44,28 +43,24 @@ def grid_points(grid: np.ndarray, nu: int, nv: int) -> np.ndarray:
     return np.stack(np.meshgrid(u, v, indexing="ij"), axis=-1).reshape(-1, 2)
 
 
-def interpolation(nodes_uv: np.ndarray, points_uv: np.ndarray) -> sparse.csr_matrix:
-    """(m, n) matrix P with P @ f = the nodal values f (n,) at the points (m, 2) [m]: linear on the
-    Delaunay triangulation of the nodes (n, 2) inside it, the nearest node's value outside."""
-    tri = Delaunay(nodes_uv)
-    simplex = tri.find_simplex(points_uv)
-    inside = simplex >= 0
-    rows, cols, vals = [], [], []
-    t = tri.transform[simplex[inside]]
-    b = np.einsum("kij,kj->ki", t[:, :2], points_uv[inside] - t[:, 2])
-    bary = np.column_stack([b, 1.0 - b.sum(axis=1)])
-    idx = np.flatnonzero(inside)
-    rows.append(np.repeat(idx, 3))
-    cols.append(tri.simplices[simplex[inside]].ravel())
-    vals.append(bary.ravel())
-    out = np.flatnonzero(~inside)
-    if out.size:
-        _, near = cKDTree(nodes_uv).query(points_uv[out])
-        rows.append(out)
-        cols.append(near)
-        vals.append(np.ones(out.size))
-    return sparse.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
-                             shape=(len(points_uv), len(nodes_uv)))
+def grid_interpolation(fg, points: np.ndarray) -> sparse.csr_matrix:
+    """(m, n_nodes) matrix P mapping nodal values of a fin's P1 shell space (``fg``:
+    :class:`shell.transfer.FinGeometry`; nodes = its DOF blocks, serial) to the points (m, 3) [m] in B
+    (their normal part dropped): the bilinear field of the cell a point lies in (the load transfer's
+    point location and pull-back, ``shell.transfer``), else the value of the in-plane nearest node."""
+    from flexnet_fe.shell.recovery import shape_q1
+    from flexnet_fe.shell.transfer import _in_plane, _locate, cell_grid
+
+    p2 = _in_plane(fg, points)
+    cell, X, mine, _ = _locate(fg, cell_grid(fg), p2)
+    blocks = fg.V.dofmap.list.array.reshape(-1, 4)
+    xn = fg.V.tabulate_dof_coordinates()
+    rows_in, out = np.flatnonzero(mine), np.flatnonzero(~mine)
+    near = cKDTree(_in_plane(fg, xn)).query(p2[out])[1] if len(out) else np.zeros(0, np.int64)
+    rows = np.concatenate([np.repeat(rows_in, 4), out])
+    cols = np.concatenate([blocks[cell[rows_in]].ravel(), near])
+    vals = np.concatenate([shape_q1(X[rows_in, 0], X[rows_in, 1]).ravel(), np.ones(len(out))])
+    return sparse.csr_matrix((vals, (rows, cols)), shape=(len(points), len(xn)))
 
 
 def resample(t: np.ndarray, w: np.ndarray, t0: float, interval: float) -> np.ndarray:
@@ -98,13 +93,14 @@ def _fin_samples(job, shell, fin, poly, nu, nv, log):
     from flexnet_fe.progress import progress_bar
     from flexnet_fe.shell.stage import run_fin
 
-    x = job.model.op.x_nodes - fin.origin
-    off_plane = float(np.abs(x @ fin.n).max())
-    if off_plane > 1e-9:
-        raise ValueError(f"{fin.name}: shell nodes {off_plane:.3g} m off the fin's mid-plane")
+    from flexnet_fe.shell.transfer import FinGeometry
+
+    pl = job.model.fin.plane
+    fg = FinGeometry(mesh=job.model.V.mesh, V=job.model.V, origin=pl.origin, e1=pl.e1, e2=pl.e2, n=pl.n)
     grid = grid_of(poly, nu, nv)
-    sampler = _Sampler(interpolation(np.column_stack([x @ fin.e1, x @ fin.e2]), grid_points(grid, nu, nv)),
-                       np.asarray(fin.n, dtype=float))
+    uv = grid_points(grid, nu, nv)
+    pts = fin.origin + uv[:, :1] * np.asarray(fin.e1) + uv[:, 1:] * np.asarray(fin.e2)
+    sampler = _Sampler(grid_interpolation(fg, pts), np.asarray(fin.n, dtype=float))
     ts = job.steps
     with progress_bar(ts.n_steps, f"fin motion {fin.name}") as bar:
         res = run_fin(replace(job, writer=sampler, steps=replace(ts, field_every=ts.every)), shell, bar, log)

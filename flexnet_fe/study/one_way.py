@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import logging
 import math
+from pathlib import Path
 
 import numpy as np
 
@@ -49,28 +50,42 @@ HEADLINES = ("dv_over_v", "fin_impulse_ns", "peak_accel_mps2")
 LABEL = "rigid fins in the collision (one-way loading)"
 
 
-def _collide(ctx: Context, motion=None):
-    """(case, CollisionResult) of the default impact, the fins moving as ``motion`` if given (deployed
-    net of the study's deploy, shared)."""
-    from flexnet_fe.study.collide import deploy_dir, simulate_case
+def _collide(case_path: Path, ddir: Path, motion=None):
+    """(case, CollisionResult) of the case's impact (``COLLIDE``) on the deployed net in ``ddir``, the
+    fins moving as ``motion`` if given."""
+    from flexnet_fe.study.collide import simulate_case
 
-    case = case_with(CASE, COLLIDE)
-    return case, simulate_case(case, deploy_dir(ctx), fin_motion=motion)[2]
+    case = case_with(case_path, COLLIDE)
+    return case, simulate_case(case, ddir, fin_motion=motion)[2]
 
 
-def _shell_fins(ctx: Context, case, res):
+def _shell_fins(case_path: Path, res, work: Path):
     """(FinMotion of every loaded fin under ``res``'s loads, {fin: (summary, history columns, fin)})."""
     from flexnet_fe.collide.stage import write_outputs
     from flexnet_fe.missile.build import build_missile
     from flexnet_fe.study.fin_motion import fin_motion
 
-    loads = ctx.scratch("one_way_loads")
+    scase = case_with(case_path, COLLIDE + SHELL_MESH)
+    loads = work / "loads"
+    loads.mkdir(parents=True, exist_ok=True)
     net = res.net
-    missile = build_missile(case.missile)
     write_outputs(res, net.model.springs[res.alive], net.rest_length[res.alive], net.model.stiffness[res.alive],
-                  missile, loads)
-    scase = case_with(CASE, COLLIDE + SHELL_MESH)
-    return fin_motion(scase, loads, ctx.scratch("one_way_shell"), interval=INTERVAL, log=LOG)
+                  build_missile(scase.missile), loads)
+    return fin_motion(scase, loads, work / "shell", interval=INTERVAL, log=LOG)
+
+
+def check(case_path: Path, ddir: Path, work: Path) -> dict:
+    """The check of the module docstring on one case (its impact on the deployed net in ``ddir``; work
+    files in ``work``): {"case", "rigid" (summary), "moving" [(scale, summary, fins' work on the rope
+    [J], CPU [s])], "fins" ({fin: (shell summary, history, fin)}), "cpu_rigid_s", "cpu_shell_s"}."""
+    (case, res), c_rigid, _ = measured(lambda: _collide(case_path, ddir))
+    (motion, fins), c_shell, _ = measured(lambda: _shell_fins(case_path, res, Path(work)))
+    moving = []
+    for scale in SCALES:
+        (_, moved), c_moved, _ = measured(lambda: _collide(case_path, ddir, scaled(motion, scale)))
+        moving.append((scale, moved.summary, float(moved.history["fin_motion_work_j"][-1]), c_moved))
+    return {"case": case, "rigid": res.summary, "moving": moving, "fins": fins, "cpu_rigid_s": c_rigid,
+            "cpu_shell_s": c_shell}
 
 
 def scaled(motion, scale: float):
@@ -123,18 +138,18 @@ def rows(ctx: Context, notes: list[str]) -> list[dict]:
         notes.append("one-way fin loading (the collision again with the fins moving as the shell computed): "
                      "full study only")
         return []
-    (case, res), c_rigid, _ = measured(lambda: _collide(ctx))
-    (motion, fins), c_shell, _ = measured(lambda: _shell_fins(ctx, case, res))
+    from flexnet_fe.study.collide import deploy_dir
+
+    c = check(CASE, deploy_dir(ctx), ctx.scratch("one_way"))
+    rigid, fins, case = c["rigid"], c["fins"], c["case"]
     out, lines = [], []
-    for scale in SCALES:
-        (_, moved), c_moved, _ = measured(lambda: _collide(ctx, scaled(motion, scale)))
-        out += difference_rows(res.summary, moved.summary, scale, (c_rigid, c_shell + c_moved))
-        m = motion_measures(float(moved.history["fin_motion_work_j"][-1]), moved.summary["energy_exchanged_j"], fins,
-                            case.collide.impact_speed)
-        worst = max(r["difference_rel"] for r in out[-len(HEADLINES) - len(res.summary["fin_impulse_ns"]):])
-        lines.append(f"w × {scale:g}: largest headline difference {worst:.3%}, the fins' work on the rope "
-                     f"{m['work_j']:.3g} J ({m['work_rel']:.3%} of the energy exchanged), energy error "
-                     f"{moved.summary['energy_error_rel']:.3%}")
+    for scale, moved, work, c_moved in c["moving"]:
+        new = difference_rows(rigid, moved, scale, (c["cpu_rigid_s"], c["cpu_shell_s"] + c_moved))
+        out += new
+        m = motion_measures(work, moved["energy_exchanged_j"], fins, case.collide.impact_speed)
+        lines.append(f"w × {scale:g}: largest headline difference {max(r['difference_rel'] for r in new):.3%}, the "
+                     f"fins' work on the rope {m['work_j']:.3g} J ({m['work_rel']:.3%} of the energy exchanged), "
+                     f"energy error {moved['energy_error_rel']:.3%}")
     notes.append(
         f"one-way fin loading (cases/radar_traction as shipped; shell at {SHELL_MESH[0].split('=')[1]} m at the loads, "
         f"{len(fins)} loaded fins, motion sampled every {INTERVAL * 1e6:g} µs): largest fin displacement "
