@@ -1,5 +1,5 @@
 """The one-way check (``study.one_way.check``: the impact again with the fins moving as the shell stage
-computed them, at w and w/2) on any case, for the paper cases the study does not run.
+computed them, at 2w, w and w/2) on any case, for the paper cases the study does not run.
 
     PYTHONPATH=. .venv/bin/python benchmarks/one_way_cases.py CASE_DIR DEPLOY_DIR WORK_DIR OUT_JSON
 
