@@ -30,6 +30,9 @@ def main(case_dir: str, deploy_dir: str, work: str, out: str) -> None:
     keep = ("dv_over_v", "peak_accel_mps2", "fin_impulse_ns", "energy_error_rel", "passed_through")
     moving = []
     for scale, summary, work_j, cpu in c["moving"]:
+        if summary is None:
+            moving.append({"scale": scale, "not_imposed": work_j})
+            continue
         m = motion_measures(work_j, summary["energy_exchanged_j"], c["fins"], case.collide.impact_speed)
         rows = difference_rows(rigid, summary, scale, (c["cpu_rigid_s"], cpu))
         moving.append({"scale": scale, "cpu_s": cpu, **{k: summary[k] for k in keep}, **m,
@@ -39,7 +42,7 @@ def main(case_dir: str, deploy_dir: str, work: str, out: str) -> None:
     rec = {"case": str(case_dir), "rigid": {k: rigid[k] for k in keep}, "cpu_rigid_s": c["cpu_rigid_s"],
            "cpu_shell_s": c["cpu_shell_s"], "moving": moving, "fins": fins, "wall_s": time.perf_counter() - t0}
     Path(out).write_text(json.dumps(rec, indent=1, default=lambda o: o.tolist() if isinstance(o, np.ndarray) else o))
-    worst = {m["scale"]: max(m["differences"].values()) for m in moving}
+    worst = {m["scale"]: max(m["differences"].values()) for m in moving if "differences" in m}
     print(f"{case_dir}: largest difference by scale {worst}; wall {rec['wall_s']:.0f} s → {out}")
 
 

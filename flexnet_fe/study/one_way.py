@@ -80,12 +80,18 @@ def _shell_fins(case_path: Path, res, work: Path):
 def check(case_path: Path, ddir: Path, work: Path) -> dict:
     """The check of the module docstring on one case (its impact on the deployed net in ``ddir``; work
     files in ``work``): {"case", "rigid" (summary), "moving" [(scale, summary, fins' work on the rope
-    [J], CPU [s])], "fins" ({fin: (shell summary, history, fin)}), "cpu_rigid_s", "cpu_shell_s"}."""
+    [J], CPU [s])] (summary None and the reason in place of the work when w × scale reaches a fin's
+    rope radius + half-thickness), "fins" ({fin: (shell summary, history, fin)}), "cpu_rigid_s",
+    "cpu_shell_s"}."""
     (case, res), c_rigid, _ = measured(lambda: _collide(case_path, ddir))
     (motion, fins), c_shell, _ = measured(lambda: _shell_fins(case_path, res, Path(work)))
     moving = []
     for scale in SCALES:
-        (_, moved), c_moved, _ = measured(lambda: _collide(case_path, ddir, scaled(motion, scale)))
+        try:
+            (_, moved), c_moved, _ = measured(lambda: _collide(case_path, ddir, scaled(motion, scale)))
+        except ValueError as err:  # w × scale reaches a fin's r + h/2 (model.with_fin_motion): not imposed
+            moving.append((scale, None, str(err), 0.0))
+            continue
         moving.append((scale, moved.summary, float(moved.history["fin_motion_work_j"][-1]), c_moved))
     return {"case": case, "rigid": res.summary, "moving": moving, "fins": fins, "cpu_rigid_s": c_rigid,
             "cpu_shell_s": c_shell}
@@ -147,6 +153,9 @@ def rows(ctx: Context, notes: list[str]) -> list[dict]:
     rigid, fins, case = c["rigid"], c["fins"], c["case"]
     out, lines = [], []
     for scale, moved, work, c_moved in c["moving"]:
+        if moved is None:
+            lines.append(f"w × {scale:g}: not imposed ({work})")
+            continue
         new = difference_rows(rigid, moved, scale, (c["cpu_rigid_s"], c["cpu_shell_s"] + c_moved))
         out += new
         m = motion_measures(work, moved["energy_exchanged_j"], fins, case.collide.impact_speed)

@@ -49,3 +49,31 @@ def test_scaled_scales_the_displacement_only():
     s = scaled(m, 0.5)
     np.testing.assert_array_equal(s.w, 0.5 * m.w)
     assert s.t0 is m.t0 and s.dt == m.dt and s.grid is m.grid
+
+
+def test_a_scale_whose_motion_reaches_the_rope_is_recorded_not_imposed(monkeypatch):
+    # Reference: the check's contract (issue 15 §2: a method's limit is shown, not hidden).
+    # model.with_fin_motion refuses a |w| that reaches a fin's rope radius + half-thickness (the
+    # kernel's crossing test reads the undeformed core); the check must record that scale as not
+    # imposed, with the reason, and still run the others.
+    from flexnet_fe.study import one_way
+
+    res = types.SimpleNamespace(summary={"dv_over_v": 1e-4}, history={"fin_motion_work_j": np.array([0.0, -0.5])})
+
+    def collide(case_path, ddir, motion=None):
+        if motion is not None and motion.w.max() > 1.5e-3:
+            raise ValueError("fin motion: |w| up to 2 mm reaches rope radius + half-thickness")
+        return "case", res
+
+    monkeypatch.setattr(one_way, "_collide", collide)
+    m = FinMotion(t0=np.zeros(1), dt=1e-6, nt=np.array([2]), offset=np.array([0, 2]), grid=np.zeros((1, 4)),
+                  w=np.full((2, 2, 2), 1e-3))
+    monkeypatch.setattr(one_way, "_shell_fins", lambda case_path, r, work: (m, {}))
+    c = one_way.check("case_dir", "deploy", "work")
+    scales = [s for s, *_ in c["moving"]]
+    assert scales == list(one_way.SCALES)
+    for scale, summary, work, _ in c["moving"]:
+        if scale * 1e-3 > 1.5e-3:
+            assert summary is None and "reaches rope radius" in work
+        else:
+            assert summary is res.summary and work == -0.5
