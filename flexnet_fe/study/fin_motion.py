@@ -63,9 +63,10 @@ def grid_interpolation(fg, points: np.ndarray) -> sparse.csr_matrix:
     return sparse.csr_matrix((vals, (rows, cols)), shape=(len(points), len(xn)))
 
 
-def resample(t: np.ndarray, w: np.ndarray, t0: float, interval: float) -> np.ndarray:
-    """Samples w (k, m) at increasing times t (k,) [s], linear in time, at t0 + j·interval for
-    every j with t0 + j·interval ≤ t[-1]: (nj, m)."""
+def resample(t: np.ndarray, w: np.ndarray, interval: float) -> np.ndarray:
+    """Samples w (k, m) at increasing times t (k,) [s], linear in time, at t[0] + j·interval for
+    every j with t[0] + j·interval ≤ t[-1]: (nj, m)."""
+    t0 = t[0]
     tj = t0 + interval * np.arange(int(np.floor((t[-1] - t0) / interval * (1 + 1e-12))) + 1)
     k = np.clip(np.searchsorted(t, tj, side="right") - 1, 0, len(t) - 2)
     c = np.clip((tj - t[k]) / (t[k + 1] - t[k]), 0.0, 1.0)[:, None]
@@ -81,30 +82,28 @@ class _Sampler:
         self.w: list[np.ndarray] = []
 
     def write(self, t: float, u_owned: np.ndarray) -> None:
-        un = u_owned.reshape(-1, NDOF_NODE)[:, :3] @ self.normal
         if self.t and t <= self.t[-1]:  # (a running peak's frame repeats a step already taken)
             return
         self.t.append(t)
-        self.w.append(self.P @ un)
+        self.w.append(self.P @ (u_owned.reshape(-1, NDOF_NODE)[:, :3] @ self.normal))
 
 
-def _fin_samples(job, shell, fin, poly, nu, nv, log):
-    """(grid (4,), times (k,), w (k, nu·nv), RunResult) of one fin's run (``shell.stage.run_fin``)."""
+def _fin_samples(job, shell, fin, grid, nu, nv, log):
+    """(times (k,), w (k, nu·nv), RunResult) of one fin's run (``shell.stage.run_fin``) on its grid
+    (``grid_of``)."""
     from flexnet_fe.progress import progress_bar
     from flexnet_fe.shell.stage import run_fin
-
     from flexnet_fe.shell.transfer import FinGeometry
 
     pl = job.model.fin.plane
     fg = FinGeometry(mesh=job.model.V.mesh, V=job.model.V, origin=pl.origin, e1=pl.e1, e2=pl.e2, n=pl.n)
-    grid = grid_of(poly, nu, nv)
     uv = grid_points(grid, nu, nv)
     pts = fin.origin + uv[:, :1] * np.asarray(fin.e1) + uv[:, 1:] * np.asarray(fin.e2)
     sampler = _Sampler(grid_interpolation(fg, pts), np.asarray(fin.n, dtype=float))
     ts = job.steps
     with progress_bar(ts.n_steps, f"fin motion {fin.name}") as bar:
         res = run_fin(replace(job, writer=sampler, steps=replace(ts, field_every=ts.every)), shell, bar, log)
-    return grid, np.array(sampler.t), np.array(sampler.w), res
+    return np.array(sampler.t), np.array(sampler.w), res
 
 
 def fin_motion(case, collide_dir: Path, work_dir: Path, *, interval: float = 1e-6, nu: int = 41, nv: int = 41,
@@ -118,40 +117,30 @@ def fin_motion(case, collide_dir: Path, work_dir: Path, *, interval: float = 1e-
 
     from flexnet_fe.io import read_history_csv
     from flexnet_fe.missile.build import build_missile
+    from flexnet_fe.missile.mesh import write_meshes
     from flexnet_fe.missile.shapes import pack_shapes
     from flexnet_fe.runs import FIN_CONTACTS, HISTORY
     from flexnet_fe.shell import stage as S
 
     missile = build_missile(case.missile)
-    polys = pack_shapes(missile).fin_poly
+    grids = np.array([grid_of(poly, nu, nv) for poly in pack_shapes(missile).fin_poly])
     shell = case.shell.model_copy(update={"history_interval": interval, "peak_check": False,
                                           "strike_envelope": False})
     contacts = S.read_fin_contacts(Path(collide_dir) / FIN_CONTACTS)
     acc_t, acc = S.read_body_acceleration(Path(collide_dir) / HISTORY)
     end = S.stage_end_time(shell, contacts, acc_t)
-    specs = S.select_fins(shell, S.fin_specs(missile.fins, _meshes(case, missile, work_dir)), contacts)
+    specs = S.select_fins(shell, S.fin_specs(missile.fins, write_meshes(case.missile, Path(work_dir) / "meshes")),
+                          contacts)
     nf = len(missile.fins)
-    t0, nt, grids, ws, fins = np.zeros(nf), np.zeros(nf, np.int64), np.zeros((nf, 4)), [], {}
-    for spec in specs:
+    t0, nt, ws, fins = np.zeros(nf), np.zeros(nf, np.int64), [], {}
+    for spec in specs:  # (in the missile's fin order: select_fins keeps it)
         f = next(i for i, m in enumerate(missile.fins) if m.name == spec.name)
         job = S.setup_fin(shell, spec, contacts, acc_t, acc, work_dir, end, log, MPI.COMM_WORLD)
-        grids[f], t, w, res = _fin_samples(job, shell, missile.fins[f], polys[f], nu, nv, log)
+        t, w, res = _fin_samples(job, shell, missile.fins[f], grids[f], nu, nv, log)
         t0[f] = t[0]
-        samples = resample(t, w, t[0], interval)
-        nt[f] = len(samples)
-        ws.append((f, samples.reshape(-1, nu, nv)))
+        ws.append(resample(t, w, interval).reshape(-1, nu, nv))
+        nt[f] = len(ws[-1])
         fins[spec.name] = (S.finish_fin(job, res, shell), read_history_csv(job.out_dir / HISTORY), missile.fins[f])
-    for f in range(nf):
-        if nt[f] == 0:
-            grids[f] = grid_of(polys[f], nu, nv)
-    ws.sort(key=lambda p: p[0])
-    w = np.concatenate([p[1] for p in ws]) if ws else np.zeros((0, nu, nv))
+    w = np.concatenate(ws) if ws else np.zeros((0, nu, nv))
     return FinMotion(t0=t0, dt=float(interval), nt=nt, offset=np.concatenate([[0], np.cumsum(nt)]), grid=grids,
                      w=w), fins
-
-
-def _meshes(case, missile, work_dir: Path) -> dict:
-    """{fin: its Gmsh mesh path} of the missile's fins (``study.shell.fin_mesh``)."""
-    from flexnet_fe.study.shell import fin_mesh
-
-    return {f.name: fin_mesh(case.missile, f.name, Path(work_dir) / "meshes") for f in missile.fins}
