@@ -82,6 +82,43 @@ def test_a_swallowed_signal_is_delivered_again_or_ends_the_process(after_s):
                                                        "handled; ending with it")
 
 
+_KEPT = """
+import os, signal, sys, time
+from flexnet_fe.runs import interrupt_handled, signal_handlers
+
+KEPT = []
+
+class Dropped:
+    def __del__(self):  # the handler's Interrupted is swallowed here ...
+        os.kill(os.getpid(), signal.SIGTERM)
+        time.sleep(0.01)
+
+try:
+    with signal_handlers():
+        quiet = sys.unraisablehook
+        sys.unraisablehook = lambda u: KEPT.append(u.exc_value)  # ... and kept alive, as an extension may
+        Dropped()
+        time.sleep(1.0)
+except KeyboardInterrupt as err:
+    interrupt_handled()
+    print("caught", err.exit_code, len(KEPT))
+    sys.exit(err.exit_code)
+"""
+
+
+def test_a_swallowed_signal_kept_alive_is_still_delivered_again():
+    # Reference: runs.signal_handlers' contract, as above, for an Interrupted that is swallowed and
+    # then kept alive (a C extension holding it, a reference cycle): it is delivered again and
+    # caught (exit 143). Before: redelivery waited for that object to die, so every re-delivered
+    # signal was dropped, the block ran to its end and the process ended with the bare signal
+    # (exit -15: CI's test_sigterm_in_collide, 2026-11-28).
+    import subprocess
+    import sys
+
+    out = subprocess.run([sys.executable, "-c", _KEPT], capture_output=True, text=True, cwd=ROOT, timeout=60)
+    assert (out.returncode, out.stdout.strip()) == (143, "caught 143 1"), out
+
+
 _SLOW_CLEANUP = """
 import os, signal, sys, time
 from flexnet_fe.runs import interrupt_handled, signal_handlers
