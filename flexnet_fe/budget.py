@@ -165,7 +165,9 @@ def collide_cost(case, file) -> StageCost:
     and ≈ 40 history columns per output row; disk: snapshots (60 B per node) × snapshots. With
     ``resolution_check`` the steps add the second impact's, at half the pieces, and the memory is
     counted twice (it runs in a second process beside the first on two cores or more:
-    ``collide.check.check_beside``)."""
+    ``collide.check.check_beside``). With ``fin_coupling = "staggered"`` the steps add the rigid
+    impact's (``shell.coupling``) and the memory the fins' sampled motion, every fin moving over
+    ``duration`` (41 × 41 floats per µs per fin: an upper bound, the fins' windows are shorter)."""
     cc, net = case.collide, case.net
     nodes, segs, l0, c = check_net(net, file)
     energy = 0.5 * _missile_mass(case.missile) * cc.impact_speed * cc.impact_speed
@@ -175,8 +177,13 @@ def collide_cost(case, file) -> StageCost:
     if cc.resolution_check:  # the check's second impact, at half the pieces (collide.resolution)
         half = cc.model_copy(update={"fin_piece_length": 0.5 * cc.fin_piece_length})
         steps += cc.end_time / _collide_step(case.model_copy(update={"collide": half}), l0)
+    staggered = cc.fin_coupling.value == "staggered"
+    if staggered:  # the impact with rigid fins first (shell.coupling)
+        steps += cc.end_time / dt
     rows = cc.end_time / cc.output_interval  # up to the cap: the run goes on while the contact does
     mem = (BASE_PROCESS + 100 * F8 * (nodes + segs) + 40 * F8 * rows) * (2 if cc.resolution_check else 1)
+    if staggered:
+        mem += 8 * cc.duration / 1e-6 * 41 * 41 * F8  # 8 fins (as shell_cost), shell.coupling.MOTION_INTERVAL
     cost = StageCost("collide", nodes, 3 * nodes + 6, steps, mem,
                      60 * (nodes + segs) * cc.snapshots + 40 * 25 * rows,
                      {"nodes": "net.mesh_size", "steps": "collide.impact_speed",
@@ -184,7 +191,9 @@ def collide_cost(case, file) -> StageCost:
                                             "collide.output_interval"), "disk": "collide.output_interval"})
     cost.detail = (f"{rows:.3g} history rows at most = collide.max_duration (or duration) / collide.output_interval, "
                    f"dt ≈ {dt:.3g} s (collide step rule, rope_split {cc.rope_split}, fin_piece_length {cc.fin_piece_length})"
-                   + ("; steps include the resolution check's impact at half the pieces" if cc.resolution_check else ""))
+                   + ("; steps include the resolution check's impact at half the pieces" if cc.resolution_check else "")
+                   + ("; steps include the staggered fin coupling's rigid impact, memory its fins' motion" if staggered
+                      else ""))
     return cost
 
 

@@ -89,6 +89,18 @@ class Case(Section):
         return self
 
     @model_validator(mode="after")
+    def _staggered_coupling_has_a_shell(self) -> "Case":
+        if self.collide is None or self.collide.fin_coupling.value != "staggered":
+            return self
+        if self.shell is None:
+            raise ValueError("collide.fin_coupling = 'staggered' needs a [shell] table (the fins' motion is the "
+                             "shell's)")
+        if self.shell.load is not None:
+            raise ValueError("collide.fin_coupling = 'staggered' moves the fins under the collision's loads: it "
+                             "cannot be used with [shell.load]")
+        return self
+
+    @model_validator(mode="after")
     def _bearing_modulus_is_the_nets(self) -> "Case":
         """shell.bearing_rope_modulus left out = the net's contact modulus (one quantity, one value;
         resolved.json shows it)."""

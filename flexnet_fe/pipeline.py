@@ -74,7 +74,8 @@ def stage_hashes(case: Case) -> dict[Stage, str]:
         spec = REGISTRY[stage]
         if any(getattr(case, t) is None for t in spec.needs):
             continue
-        blob = {"stage": stage.value, "version": __version__, "tables": {t: data.get(t) for t in spec.reads},
+        tables = (*spec.reads, *spec.reads_also(case))
+        blob = {"stage": stage.value, "version": __version__, "tables": {t: data.get(t) for t in tables},
                 "upstream": {u.value: out.get(u) for u in spec.upstream(case)}}
         out[stage] = hashlib.sha256(json.dumps(blob, sort_keys=True).encode()).hexdigest()
     return out

@@ -41,11 +41,22 @@ def deploy(ctx: StageContext) -> dict:
 
 
 def collide(ctx: StageContext) -> dict:
-    from flexnet_fe.collide.stage import run_collide
-
+    """Under ``collide.fin_coupling = "staggered"`` the impact is run twice around the loaded fins'
+    shell runs (``shell.coupling``), else once."""
     c = ctx.case
     deploy_dir = ctx.stage_output("deploy") if Stage.deploy in _collide_upstream(c) else None
+    if _collide_reads_shell(c):
+        from flexnet_fe.shell.coupling import run_staggered
+
+        return run_staggered(c.net, c.deploy, c.missile, c.collide, c.shell, _air(c), deploy_dir, ctx.stage_dir,
+                             ctx.log)
+    from flexnet_fe.collide.stage import run_collide
+
     return run_collide(c.net, c.deploy, c.missile, c.collide, _air(c), deploy_dir, ctx.stage_dir, ctx.log)
+
+
+def _collide_reads_shell(case) -> bool:
+    return case.collide.fin_coupling.value == "staggered"
 
 
 def shell(ctx: StageContext) -> dict:
@@ -89,6 +100,7 @@ class StageSpec:
 
     needs        case tables that must be present for the stage to run
     reads        every case table whose values can change the stage's results (hashed)
+    reads_also   ``case → further tables`` read only under some settings (hashed with ``reads``)
     upstream     ``case → stages whose outputs this stage reads``
     run          the adapter ``StageContext → summary section``
     distributed  True: under ``mpirun`` every rank calls ``run``; False: rank 0 alone
@@ -99,12 +111,14 @@ class StageSpec:
     upstream: Callable[[Any], tuple[Stage, ...]]
     run: Callable[[StageContext], dict]
     distributed: bool = False
+    reads_also: Callable[[Any], tuple[str, ...]] = lambda case: ()
 
 
 REGISTRY: dict[Stage, StageSpec] = {
     Stage.deploy: StageSpec(("net",), ("atmosphere", "net", "deploy"), lambda case: (), deploy),
     Stage.collide: StageSpec(("net", "missile", "collide"), ("atmosphere", "net", "deploy", "missile", "collide"),
-                             _collide_upstream, collide),
+                             _collide_upstream, collide,
+                             reads_also=lambda case: ("shell",) if _collide_reads_shell(case) else ()),
     Stage.shell: StageSpec(("missile", "collide", "shell"), ("missile", "shell"),
                            lambda case: (Stage.collide,), shell, distributed=True),
     Stage.flight: StageSpec(("missile", "flight"), ("atmosphere", "missile", "flight"), _flight_upstream, flight),

@@ -86,7 +86,7 @@ def _exit_with(parent: int) -> None:
 
 
 def _check_process(conn, parent: int, net, missile: Missile, cfg: CollideConfig, gravity: float,
-                   density: float) -> None:
+                   density: float, fin_motion) -> None:
     """The check's impact in a spawned process of ``parent``: sends ("ok", summary, None, log
     lines), ("error", numerical?, message, lines) for a FlexnetError, or ("crash", traceback, None,
     lines); ends itself when ``parent`` is gone (``_exit_with``)."""
@@ -107,7 +107,8 @@ def _check_process(conn, parent: int, net, missile: Missile, cfg: CollideConfig,
     log.setLevel(logging.INFO)
     log.addHandler(_LogLines(lines))
     try:
-        summary = simulate(net, missile, cfg, gravity, log, air_density=density, n_snapshots=2).summary
+        summary = simulate(net, missile, cfg, gravity, log, air_density=density, n_snapshots=2,
+                           fin_motion=fin_motion).summary
         conn.send(("ok", summary, None, lines))
     except FlexnetError as err:
         conn.send(("error", isinstance(err, NumericalError), str(err), lines))
@@ -146,10 +147,11 @@ class _Check:
             self.proc = None
 
 
-def start_check(net, missile: Missile, cfg: CollideConfig, air: Air, log: logging.Logger) -> _Check:
-    """Start the check's impact beside the run's (``check_beside``), or prepare it to run after."""
+def start_check(net, missile: Missile, cfg: CollideConfig, air: Air, log: logging.Logger, fin_motion=None) -> _Check:
+    """Start the check's impact beside the run's (``check_beside``), or prepare it to run after; the
+    fins moving as ``fin_motion`` (``collide.model.FinMotion``) in it too, if given."""
     fine = check_config(cfg)
-    args = (net, missile, fine, air.gravity, air.density)
+    args = (net, missile, fine, air.gravity, air.density, fin_motion)
     check = _Check(args, fine.fin_piece_length, fine.fin_piece_chord)
     beside = check_beside()
     where = "beside the impact (a second process)" if beside else "after the impact"
@@ -171,8 +173,9 @@ def start_check(net, missile: Missile, cfg: CollideConfig, air: Air, log: loggin
 def finish_check(summary: dict, check: _Check, cfg: CollideConfig, log: logging.Logger) -> None:
     """Wait for (or run) the check's impact; add ``summary['resolution_check']`` and its warnings."""
     if check.proc is None:
-        net, missile, fine_cfg, gravity, density = check.args
-        fine = simulate(net, missile, fine_cfg, gravity, log, air_density=density, n_snapshots=2).summary
+        net, missile, fine_cfg, gravity, density, motion = check.args
+        fine = simulate(net, missile, fine_cfg, gravity, log, air_density=density, n_snapshots=2,
+                        fin_motion=motion).summary
     else:
         try:
             kind, a, b, lines = check.conn.recv()

@@ -59,6 +59,22 @@ class ContactLaw(str, Enum):
     line = "line"
 
 
+class FinCoupling(str, Enum):
+    """How the fins' elasticity enters the collision (issue 15 §3; docs/validation.md, "One-way fin
+    loading" and "The staggered fin coupling").
+
+    one_way    the fins are rigid in the collision; the shell stage then loads the elastic fins
+               with its contact forces (the paper's model)
+    staggered  one step of the staggered (Gauss–Seidel) iteration of the coupled problem: the
+               impact with rigid fins, the shell's normal displacement of every loaded fin under
+               those loads, then the impact again with the fins moving so (``shell.coupling``); the
+               second impact is the stage's result. ≈ 2× the impact's CPU plus the fins' shell runs
+    """
+
+    one_way = "one_way"
+    staggered = "staggered"
+
+
 class CollideConfig(Section):
     """The ``[collide]`` table: scene, contact law, detection, time step, crop and outputs."""
 
@@ -162,6 +178,10 @@ class CollideConfig(Section):
         "SAE J211-1 channel frequency class of the filtered missile acceleration in the summary [-] "
         "(collide.metrics; default 180, justified in docs/validation.md)"))
     snapshots: int = Field(24, ge=2, le=1000, description="number of net snapshots written (.vtu + .pvd)")
+    fin_coupling: FinCoupling = Field(FinCoupling.one_way, description=(
+        "'one_way': fins rigid in the collision (the paper's model); 'staggered': the impact again with the "
+        "fins moving as the shell computes them under the rigid impact's loads (FinCoupling; needs the case's shell "
+        "table and contact_law = 'line')"))
 
     @model_validator(mode="after")
     def _consistent(self) -> "CollideConfig":
@@ -177,6 +197,9 @@ class CollideConfig(Section):
             if self.load_interval > self.output_interval or abs(parts - round(parts)) > 1e-6 * parts:
                 raise ValueError(f"load_interval ({self.load_interval:g} s) must divide output_interval "
                                  f"({self.output_interval:g} s) into a whole number of parts")
+        if self.fin_coupling is FinCoupling.staggered and self.contact_law is not ContactLaw.line:
+            raise ValueError("fin_coupling = 'staggered' needs contact_law = 'line' (the moving fins are a "
+                             "line-law model: collide.model.with_fin_motion)")
         if self.resolution_check and self.fin_piece_length is None:
             raise ValueError("resolution_check needs fin_piece_length (the check halves it)")
         if self.max_duration is not None and self.max_duration < self.duration:

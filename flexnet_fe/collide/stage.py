@@ -42,12 +42,15 @@ from flexnet_fe.runs import FIN_CONTACTS, HISTORY, MISSILE_PVD, NET_PVD
 
 
 def run_collide(net_cfg, deploy_cfg, missile_cfg: MissileConfig, collide_cfg: CollideConfig, air: Air,
-                deploy_dir: Path | None, stage_dir: Path, log: logging.Logger) -> dict:
+                deploy_dir: Path | None, stage_dir: Path, log: logging.Logger, *, fin_motion=None,
+                plots: bool = True) -> dict:
     """Run the collision and write its files (module docstring). ``deploy_cfg`` is not used by the
     physics (the held net comes from ``deploy_dir/net_state.npz`` or the flat net); it is accepted
-    so the pipeline passes the same tables to every stage. Returns the ``collide`` summary
-    section (DESIGN.md §3 keys plus extras). Raises NumericalError on tunnelling (unless the case
-    allows it) or a blow-up."""
+    so the pipeline passes the same tables to every stage. ``fin_motion``: the fins moving as
+    prescribed (``collide.model.FinMotion``; the staggered coupling, ``shell.coupling``), in the
+    impact and its resolution check; ``plots``: False skips the PNGs. Returns the ``collide``
+    summary section (DESIGN.md §3 keys plus extras). Raises NumericalError on tunnelling (unless
+    the case allows it) or a blow-up."""
     del deploy_cfg
     stage_dir = Path(stage_dir)
     stage_dir.mkdir(parents=True, exist_ok=True)
@@ -56,16 +59,17 @@ def run_collide(net_cfg, deploy_cfg, missile_cfg: MissileConfig, collide_cfg: Co
     log.info("collide: %s net (%s, %d nodes), %s missile (%.1f kg), %.0f m/s, incidence %.3g rad, "
              "aim (%.3g, %.3g) m", net.model.kind, net.source.value, net.model.n_nodes, missile.name,
              missile.mass, collide_cfg.impact_speed, collide_cfg.incidence_angle, *collide_cfg.aim_point)
-    check = start_check(net, missile, collide_cfg, air, log) if collide_cfg.resolution_check else None
+    check = start_check(net, missile, collide_cfg, air, log, fin_motion) if collide_cfg.resolution_check else None
     try:
-        res = simulate(net, missile, collide_cfg, air.gravity, log, air_density=air.density)
+        res = simulate(net, missile, collide_cfg, air.gravity, log, air_density=air.density, fin_motion=fin_motion)
         # the files and plots while the check (beside) runs on: they do not depend on it
         net = res.net  # split near the path per collide.rope_split
         write_outputs(res, net.model.springs[res.alive], net.rest_length[res.alive],
                       net.model.stiffness[res.alive], missile, stage_dir)
-        from flexnet_fe.collide.plots import plot_all
+        if plots:
+            from flexnet_fe.collide.plots import plot_all
 
-        plot_all(res, missile, collide_cfg, stage_dir, title=f"{missile.name} missile vs {net.model.kind} net")
+            plot_all(res, missile, collide_cfg, stage_dir, title=f"{missile.name} missile vs {net.model.kind} net")
         if check is not None:
             finish_check(res.summary, check, collide_cfg, log)
     finally:

@@ -269,7 +269,26 @@ def _missile_items(run: RunData) -> list[Item]:
             items.append(Item(label, with_unit(c[key], unit_of(key)), f"collide summary {key}"))
     if isinstance(c.get("passed_through"), bool):
         items.append(_outcome_item(c))
+    if isinstance(c.get("fin_coupling"), dict):
+        items.append(_coupling_item(c["fin_coupling"]))
     return items
+
+
+def _coupling_item(fc: dict) -> Item:
+    """The staggered fin coupling's row: how far the fins' motion moved the fin impulses from rigid
+    fins — the fin whose impulse changed most in N s (not in per cent: a graze's 0.03 N s may move
+    by tens of per cent) and its own move — from the collide summary."""
+    moves = {f: m for f, m in (fc.get("fin_impulse_move_rel") or {}).items() if _num(m) is not None}
+    rigid = (fc.get("rigid") or {}).get("fin_impulse_ns") or {}
+    worst = max(moves, key=lambda f: abs(moves[f] * (_num(rigid.get(f)) or 0.0)), default=None)
+    text = "staggered (the impact again with the fins moving as the shell computes them)"
+    if worst is not None:
+        text += f"; against rigid fins: {worst}'s impulse {100 * moves[worst]:+.2f} %"
+    note = "collide summary fin_coupling"
+    if _num(fc.get("fin_impulse_largest_move_rel")) is not None:
+        note += (f"; largest impulse change over the largest fin impulse {100 * fc['fin_impulse_largest_move_rel']:.2f} %"
+                 f", Δv/v {100 * fc.get('dv_over_v_move_rel', 0.0):+.3f} %")
+    return Item("fin coupling", text, note)
 
 
 def _outcome_item(c: dict) -> Item:

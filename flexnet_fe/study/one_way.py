@@ -8,7 +8,7 @@ the staggered (Gauss–Seidel) iteration of the coupled problem:
 
 1. the default impact with rigid fins (``study.collide.simulate_case``);
 2. the shell stage on every loaded fin under those loads (5 mm at the loads), each fin's normal
-   displacement w(u, v, t) sampled on a grid every ``INTERVAL`` (``study.fin_motion``);
+   displacement w(u, v, t) sampled on a grid every ``INTERVAL`` (``shell.motion``);
 3. the same impact with each fin's mid-surface displaced by w and moving at ẇ
    (``collide.model.FinMotion``: the rope meets the fin where the shell put it and at its speed;
    the missile still takes every contact force; the moving surfaces' work on the rope is booked,
@@ -42,7 +42,7 @@ motion under the strikes is what the second collision sees), two snapshots."""
 SHELL_MESH = ("shell.local_mesh_size=0.005",)
 """Fin element size at the loads for the motion: 5 mm (the shell study's coarsest point: the largest
 displacement of its fin within 1.6 % of the 0.625 mm reference; stresses are not used here, and
-``study.fin_motion`` runs without the peak check and the strike envelope)."""
+``shell.motion`` runs without the peak check and the strike envelope)."""
 INTERVAL = 1e-6
 """[s] The fin motion's sample interval (the strikes last 1–4 µs)."""
 SCALES = (2.0, 1.0, 0.5)
@@ -67,7 +67,7 @@ def _shell_fins(case_path: Path, res, work: Path):
     """(FinMotion of every loaded fin under ``res``'s loads, {fin: (summary, history columns, fin)})."""
     from flexnet_fe.collide.stage import write_outputs
     from flexnet_fe.missile.build import build_missile
-    from flexnet_fe.study.fin_motion import fin_motion
+    from flexnet_fe.shell.motion import fin_motion
 
     scase = case_with(case_path, COLLIDE + SHELL_MESH)
     loads = work / "loads"
@@ -75,7 +75,7 @@ def _shell_fins(case_path: Path, res, work: Path):
     net = res.net
     write_outputs(res, net.model.springs[res.alive], net.rest_length[res.alive], net.model.stiffness[res.alive],
                   build_missile(scase.missile), loads)
-    return fin_motion(scase, loads, work / "shell", interval=INTERVAL, log=LOG)
+    return fin_motion(scase.missile, scase.shell, loads, work / "shell", interval=INTERVAL, log=LOG)
 
 
 def check(case_path: Path, ddir: Path, work: Path) -> dict:

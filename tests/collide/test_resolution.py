@@ -107,7 +107,7 @@ def test_the_check_process_error_reaches_the_stage_as_one_line(monkeypatch):
     monkeypatch.setattr(check, "_exit_with", lambda parent: None)  # (it watches its parent: this process's)
     recv, send = multiprocessing.Pipe(duplex=False)
     check._check_process(send, os.getppid(), held_net(net_cfg, cfg.net_source, None),
-                         build_missile(MissileConfig(preset="radar")), cfg, air.gravity, air.density)
+                         build_missile(MissileConfig(preset="radar")), cfg, air.gravity, air.density, None)
     kind, numerical, message, lines = recv.recv()
     assert (kind, numerical) == ("error", True) and "tunnelling" in message and "\n" not in message
     assert any("dt =" in line for line in lines)  # the check's log came back with it

@@ -156,6 +156,20 @@ def test_a_run_stopped_by_its_time_cap_in_contact_has_no_outcome():
     assert not _outcome_item({**base, "passed_through": True}).bad
 
 
+def test_the_fin_coupling_row_names_the_fin_whose_impulse_changed_most():
+    """Under the staggered fin coupling the collide table says so and names the fin whose impulse
+    the fins' motion changed most in N s with its own move — radar × rotary's rudder_4 (−3.13 % of
+    1.185 N s), not rudder_2's graze (−7.4 % of 0.03 N s) — from summary values (run 2026-11-29)."""
+    from flexnet_fe.report.verdict import _coupling_item
+
+    fc = {"rigid": {"fin_impulse_ns": {"wing_1": 6.4999, "rudder_2": 0.03049, "rudder_3": 0.0, "rudder_4": 1.18544}},
+          "fin_impulse_move_rel": {"wing_1": 0.00192, "rudder_2": -0.0744, "rudder_3": None, "rudder_4": -0.0313},
+          "fin_impulse_largest_move_rel": 0.0042, "dv_over_v_move_rel": -0.00055}
+    item = _coupling_item(fc)
+    assert item.value.startswith("staggered") and "rudder_4's impulse -3.13 %" in item.value and not item.bad
+    assert "0.42 %" in item.note
+
+
 def test_flight_damage_from_the_shell_shows_every_fin_that_lost_area(tmp_path):
     """The flight's link to the shell stage (flight.damage.damage_from_shell: lost_area_fraction
     per fin) is shown fin by fin — a rudder's loss is not hidden behind a 'wing damage 0 %'."""

@@ -1,4 +1,4 @@
-"""Sampling a fin's normal displacement for the collision kernel (``study.fin_motion``): the grid, the
+"""Sampling a fin's normal displacement for the collision kernel (``shell.motion``): the grid, the
 interpolation, the time resampling and the sampler against closed forms, and end to end against the
 shell stage's own displacement field. (The interpolation and end-to-end tests after a helper's
 branch ``finmotion``, 2026-11-28.)"""
@@ -18,7 +18,7 @@ from flexnet_fe.missile.build import build_missile
 from flexnet_fe.missile.config import MissileConfig
 from flexnet_fe.missile.shapes import pack_shapes
 from flexnet_fe.shell.forms import NDOF_NODE
-from flexnet_fe.study.fin_motion import _Sampler, fin_motion, grid_interpolation, grid_of, grid_points, resample
+from flexnet_fe.shell.motion import _Sampler, fin_motion, grid_interpolation, grid_of, grid_points, resample
 
 CASE = Path(__file__).resolve().parents[2] / "cases" / "radar_traction"
 COARSE = ["missile.mesh_size=0.04", "shell.end_margin=3e-4", "shell.workers=1", "shell.local_mesh_size=0.02"]
@@ -182,8 +182,8 @@ def test_end_to_end_equals_the_stage_displacement_at_its_frames(case, tmp_path, 
     ref.mkdir()
     _collision(ref, fins, loaded)
     interval, frames = _stage_reference(shell, case.missile, ref, pts, fin, monkeypatch)
-    m, summaries = fin_motion(case.model_copy(update={"shell": shell.model_copy(update={"history_interval": interval})}),
-                              tmp_path, tmp_path / "fm", interval=interval, nu=nu, nv=nv)
+    m, summaries = fin_motion(case.missile, shell.model_copy(update={"history_interval": interval}), tmp_path,
+                              tmp_path / "fm", interval=interval, nu=nu, nv=nv)
     assert m.w.shape == (m.offset[-1], nu, nv) and m.dt == interval
     assert [int(n) for n in m.nt] == [0] * loaded + [m.offset[-1]] + [0] * (len(fins) - loaded - 1)
     assert set(summaries) == {fin.name}

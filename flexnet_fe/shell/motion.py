@@ -1,5 +1,6 @@
 """The fins' normal displacement under a collision's loads, from the shell stage, sampled for the
-collision kernel (``collide.model.FinMotion``; the one-way check, ``study.one_way``).
+collision kernel (``collide.model.FinMotion``): the staggered fin coupling (``shell.coupling``)
+and the one-way check (``study.one_way``).
 
 Each loaded fin is set up and run as the shell stage does (``shell.stage.setup_fin``, ``run_fin``:
 same mesh, window, step and loads), with one addition: at every history sample (stride
@@ -26,7 +27,7 @@ from scipy.spatial import cKDTree
 from flexnet_fe.collide.model import FinMotion
 from flexnet_fe.shell.forms import NDOF_NODE
 
-LOG = logging.getLogger("flexnet.study.fin_motion")
+LOG = logging.getLogger("flexnet.shell.motion")
 
 
 def grid_of(poly: np.ndarray, nu: int, nv: int) -> np.ndarray:
@@ -106,13 +107,14 @@ def _fin_samples(job, shell, fin, grid, nu, nv, log):
     return np.array(sampler.t), np.array(sampler.w), res
 
 
-def fin_motion(case, collide_dir: Path, work_dir: Path, *, interval: float = 1e-6, nu: int = 41, nv: int = 41,
-               log: logging.Logger = LOG) -> tuple[FinMotion, dict]:
-    """(FinMotion of ``case``'s missile, {fin: (shell summary, history columns, missile fin)}) from
-    the collision in ``collide_dir`` (``fin_contacts.npz``, ``history.csv``): every loaded fin run
-    by the shell stage's functions under ``case.shell`` (its history every ``interval`` [s]),
-    w sampled every ``interval`` on an nu × nv grid; unloaded fins rigid (nt = 0). Work files in
-    ``work_dir``."""
+def fin_motion(missile_cfg, shell_cfg, collide_dir: Path, work_dir: Path, *, interval: float = 1e-6, nu: int = 41,
+               nv: int = 41, log: logging.Logger = LOG) -> tuple[FinMotion, dict]:
+    """(FinMotion of the missile of ``missile_cfg``, {fin: (shell summary, history columns, missile
+    fin)}) from the collision in ``collide_dir`` (``fin_contacts.npz``, ``history.csv``): every loaded
+    fin run by the shell stage's functions under ``shell_cfg`` (its history every ``interval`` [s],
+    without the peak check and the strike envelope), w sampled every ``interval`` on an nu × nv grid;
+    unloaded fins rigid (nt = 0). Work files (meshes, the fins' histories) in ``work_dir``. Serial
+    (each fin on this process alone: the collide stage runs on rank 0 of an mpirun job)."""
     from mpi4py import MPI
 
     from flexnet_fe.io import read_history_csv
@@ -122,20 +124,19 @@ def fin_motion(case, collide_dir: Path, work_dir: Path, *, interval: float = 1e-
     from flexnet_fe.runs import FIN_CONTACTS, HISTORY
     from flexnet_fe.shell import stage as S
 
-    missile = build_missile(case.missile)
+    missile = build_missile(missile_cfg)
     grids = np.array([grid_of(poly, nu, nv) for poly in pack_shapes(missile).fin_poly])
-    shell = case.shell.model_copy(update={"history_interval": interval, "peak_check": False,
-                                          "strike_envelope": False})
+    shell = shell_cfg.model_copy(update={"history_interval": interval, "peak_check": False, "strike_envelope": False})
     contacts = S.read_fin_contacts(Path(collide_dir) / FIN_CONTACTS)
     acc_t, acc = S.read_body_acceleration(Path(collide_dir) / HISTORY)
     end = S.stage_end_time(shell, contacts, acc_t)
-    specs = S.select_fins(shell, S.fin_specs(missile.fins, write_meshes(case.missile, Path(work_dir) / "meshes")),
+    specs = S.select_fins(shell, S.fin_specs(missile.fins, write_meshes(missile_cfg, Path(work_dir) / "meshes")),
                           contacts)
     nf = len(missile.fins)
     t0, nt, ws, fins = np.zeros(nf), np.zeros(nf, np.int64), [], {}
     for spec in specs:  # (in the missile's fin order: select_fins keeps it)
         f = next(i for i, m in enumerate(missile.fins) if m.name == spec.name)
-        job = S.setup_fin(shell, spec, contacts, acc_t, acc, work_dir, end, log, MPI.COMM_WORLD)
+        job = S.setup_fin(shell, spec, contacts, acc_t, acc, work_dir, end, log, MPI.COMM_SELF)
         t, w, res = _fin_samples(job, shell, missile.fins[f], grids[f], nu, nv, log)
         t0[f] = t[0]
         ws.append(resample(t, w, interval).reshape(-1, nu, nv))
