@@ -72,9 +72,10 @@ def run_staggered(net_cfg, deploy_cfg, missile_cfg, collide_cfg, shell_cfg, air,
                              moving_fins=sorted(fins))
     shutil.rmtree(work)
     c = s["fin_coupling"]
-    log.info("collide (fin coupling): against rigid fins Δv/v %+.3f %%, the CFC peak %+.3f %%, fin impulses %s; "
-             "the fins' work on the rope %.3g J", 100 * c["dv_over_v_move_rel"], 100 * c["peak_accel_move_rel"],
-             ", ".join(f"{f} {100 * m:+.2f} %" for f, m in c["fin_impulse_move_rel"].items() if m is not None), work_j)
+    log.info("collide (fin coupling): against rigid fins Δv/v %s, the CFC peak %s, fin impulses %s; the fins' work "
+             "on the rope %.3g J", _pct(c["dv_over_v_move_rel"]), _pct(c["peak_accel_move_rel"]),
+             ", ".join(f"{f} {_pct(m)}" for f, m in c["fin_impulse_move_rel"].items() if m is not None) or "none",
+             work_j)
     return s
 
 
@@ -98,12 +99,21 @@ def coupling_section(rigid: dict, coupled: dict, w_max: float, work_j: float, wa
     [J]; the three parts' wall times [s]."""
     jr, jc = rigid["fin_impulse_ns"], coupled["fin_impulse_ns"]
     fins = sorted(set(jr) | set(jc))
-    largest = max(max(jr.values(), default=0.0), 1e-300)
+    largest = max(jr.values(), default=0.0)
     return {"scheme": "staggered, one step (rigid impact, fins' motion, impact with the fins moving)",
             "rigid": {**{h: rigid[h] for h in HEADLINES}, "fin_impulse_ns": dict(jr)},
-            "dv_over_v_move_rel": coupled["dv_over_v"] / rigid["dv_over_v"] - 1.0,
-            "peak_accel_move_rel": coupled["peak_accel_mps2"] / rigid["peak_accel_mps2"] - 1.0,
-            "fin_impulse_move_rel": {f: (jc.get(f, 0.0) / j - 1.0 if j > 0 else None) for f, j in jr.items()},
-            "fin_impulse_largest_move_rel": max((abs(jc.get(f, 0.0) - jr.get(f, 0.0)) for f in fins),
-                                                default=0.0) / largest,
+            "dv_over_v_move_rel": _move(coupled["dv_over_v"], rigid["dv_over_v"]),
+            "peak_accel_move_rel": _move(coupled["peak_accel_mps2"], rigid["peak_accel_mps2"]),
+            "fin_impulse_move_rel": {f: _move(jc.get(f, 0.0), j) for f, j in jr.items()},
+            "fin_impulse_largest_move_rel": (max(abs(jc.get(f, 0.0) - jr.get(f, 0.0)) for f in fins) / largest
+                                             if largest > 0 else None),
             "max_abs_w_m": w_max, "fin_motion_work_j": work_j, "wall_s": wall_s}
+
+
+def _move(new: float, old: float) -> float | None:
+    """new / old − 1, or None when there is nothing to compare with (old = 0: no contact there)."""
+    return new / old - 1.0 if old > 0 else None
+
+
+def _pct(m: float | None) -> str:
+    return "—" if m is None else f"{100 * m:+.3f} %"

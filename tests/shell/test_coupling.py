@@ -88,6 +88,22 @@ def test_the_stage_is_the_impact_with_the_fins_moving_as_the_shell_computed(tmp_
     assert np.abs(h["energy_balance_j"]).max() <= 5e-3 * exchanged
 
 
+def test_the_section_of_an_impact_without_contact_has_no_moves():
+    # Reference: coupling_section's contract — a move is relative to the rigid value, so where the rigid
+    # impact had none (no contact: Δv, peak and every impulse 0) the move is None, not a division by 0.
+    from flexnet_fe.shell.coupling import coupling_section
+
+    zero = {"dv_over_v": 0.0, "peak_accel_mps2": 0.0, "fin_impulse_ns": {"wing_1": 0.0, "rudder_1": 0.0}}
+    c = coupling_section(zero, zero, 0.0, 0.0, {})
+    assert c["dv_over_v_move_rel"] is None and c["peak_accel_move_rel"] is None
+    assert c["fin_impulse_move_rel"] == {"wing_1": None, "rudder_1": None} and c["fin_impulse_largest_move_rel"] is None
+    some = {"dv_over_v": 2e-4, "peak_accel_mps2": 50.0, "fin_impulse_ns": {"wing_1": 4.0, "rudder_1": 1.0}}
+    moved = {"dv_over_v": 2e-4, "peak_accel_mps2": 50.0, "fin_impulse_ns": {"wing_1": 4.0, "rudder_1": 0.9}}
+    c = coupling_section(some, moved, 1e-3, -1.0, {})
+    assert c["fin_impulse_move_rel"]["rudder_1"] == pytest.approx(-0.1)
+    assert c["fin_impulse_largest_move_rel"] == pytest.approx(0.1 / 4.0)  # largest |ΔJ| over the largest J
+
+
 def test_the_coupling_needs_the_line_law_and_a_shell_table_without_a_given_load(tmp_path):
     # Reference: the case checks of CollideConfig and Case (one line naming the field).
     with pytest.raises(ValueError, match="needs contact_law = 'line'"):
