@@ -8,7 +8,7 @@ the staggered (Gauss–Seidel) iteration of the coupled problem:
 
 1. the default impact with rigid fins (``study.collide.simulate_case``);
 2. the shell stage on every loaded fin under those loads (5 mm at the loads), each fin's normal
-   displacement w(u, v, t) sampled on a grid every ``INTERVAL`` (``shell.motion``);
+   displacement w(u, v, t) sampled on a grid every 1 µs (``shell.motion``, as ``shell.coupling`` does);
 3. the same impact with each fin's mid-surface displaced by w and moving at ẇ
    (``collide.model.FinMotion``: the rope meets the fin where the shell put it and at its speed;
    the missile still takes every contact force; the moving surfaces' work on the rope is booked,
@@ -39,12 +39,8 @@ LOG = logging.getLogger("flexnet.study.one_way")
 COLLIDE = ("collide.snapshots=2",)
 """The default impact as shipped (its fin loads at the case's own 0.3125 µs sampling: the shell's
 motion under the strikes is what the second collision sees), two snapshots."""
-SHELL_MESH = ("shell.local_mesh_size=0.005",)
-"""Fin element size at the loads for the motion: 5 mm (the shell study's coarsest point: the largest
-displacement of its fin within 1.6 % of the 0.625 mm reference; stresses are not used here, and
-``shell.motion`` runs without the peak check and the strike envelope)."""
-INTERVAL = 1e-6
-"""[s] The fin motion's sample interval (the strikes last 1–4 µs)."""
+# The motion is the staggered coupling's (``shell.coupling``: 5 mm at the loads, ``MOTION_LOCAL_MESH``;
+# sampled every 1 µs, ``MOTION_INTERVAL``): this check is that coupling's step, run as a study.
 SCALES = (2.0, 1.0, 0.5)
 """The second collision with w × each of these (module docstring: the fins' effect must scale with w).
 2: the sampled motion may read low — its largest surface speed grows 7 % from 1 to 0.5 µs samples
@@ -67,15 +63,17 @@ def _shell_fins(case_path: Path, res, work: Path):
     """(FinMotion of every loaded fin under ``res``'s loads, {fin: (summary, history columns, fin)})."""
     from flexnet_fe.collide.stage import write_outputs
     from flexnet_fe.missile.build import build_missile
+    from flexnet_fe.shell.coupling import MOTION_INTERVAL, MOTION_LOCAL_MESH, motion_shell
     from flexnet_fe.shell.motion import fin_motion
 
-    scase = case_with(case_path, COLLIDE + SHELL_MESH)
+    scase = case_with(case_path, COLLIDE)
     loads = work / "loads"
     loads.mkdir(parents=True, exist_ok=True)
     net = res.net
     write_outputs(res, net.model.springs[res.alive], net.rest_length[res.alive], net.model.stiffness[res.alive],
                   build_missile(scase.missile), loads)
-    return fin_motion(scase.missile, scase.shell, loads, work / "shell", interval=INTERVAL, log=LOG)
+    return fin_motion(scase.missile, motion_shell(scase.shell, MOTION_LOCAL_MESH), loads, work / "shell",
+                      interval=MOTION_INTERVAL, log=LOG)
 
 
 def check(case_path: Path, ddir: Path, work: Path) -> dict:
@@ -148,6 +146,7 @@ def rows(ctx: Context, notes: list[str]) -> list[dict]:
         notes.append("one-way fin loading (the collision again with the fins moving as the shell computed): "
                      "full study only")
         return []
+    from flexnet_fe.shell.coupling import MOTION_INTERVAL, MOTION_LOCAL_MESH
     from flexnet_fe.study.collide import deploy_dir
 
     c = check(CASE, deploy_dir(ctx), ctx.scratch("one_way"))
@@ -164,8 +163,8 @@ def rows(ctx: Context, notes: list[str]) -> list[dict]:
                      f"fins' work on the rope {m['work_j']:.3g} J ({m['work_rel']:.3%} of the energy exchanged), "
                      f"energy error {moved['energy_error_rel']:.3%}")
     notes.append(
-        f"one-way fin loading (cases/radar_traction as shipped; shell at {SHELL_MESH[0].split('=')[1]} m at the loads, "
-        f"{len(fins)} loaded fins, motion sampled every {INTERVAL * 1e6:g} µs): largest fin displacement "
+        f"one-way fin loading (cases/radar_traction as shipped; shell at {MOTION_LOCAL_MESH:g} m at the loads, "
+        f"{len(fins)} loaded fins, motion sampled every {MOTION_INTERVAL * 1e6:g} µs): largest fin displacement "
         f"{1e3 * m['u_max_m']:.3g} mm, largest RMS fin speed {m['v_rms_mps']:.3g} m/s ({m['v_rel']:.2%} of the "
         f"impact speed); the collision again with the fins moving so: {'; '.join(lines)}")
     return out
