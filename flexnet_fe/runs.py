@@ -231,11 +231,11 @@ def _propagating() -> bool:
     """True when an :class:`Interrupted` is on its way out through the code the signal interrupted:
     it is the exception being handled there (an ``except``, ``finally`` or ``__exit__`` it passes
     through) or the context of one. Asked of the exception state, not of the Interrupted object's
-    life: one swallowed where Python or an extension keeps it (a C extension's module
-    initialisation holding it in a static, a reference cycle) would otherwise block every
-    re-delivery, and the stage would run to its end and the process end with the bare signal
-    (CI, 2026-11-28: ``test_sigterm_in_collide``, exit −15; signals traced landing in scipy's
-    Cython module initialisation at the collide stage's start)."""
+    life: one swallowed and then kept alive (by an extension, a reference cycle) would otherwise
+    block every re-delivery, and the stage would run to its end and the process end with the bare
+    signal — CI's ``test_sigterm_in_collide``, exit −15, 2026-11-28. (Signals traced at the
+    collide stage's start land in imports, one in scipy's Cython module initialisation, which
+    swallowed it; what kept CI's alive was not observed.)"""
     from flexnet_fe.errors import Interrupted
 
     err, seen = sys.exc_info()[1], set()

@@ -286,8 +286,9 @@ def _coupling_item(fc: dict) -> Item:
         text += f"; against rigid fins: {worst}'s impulse {100 * moves[worst]:+.2f} %"
     note = "collide summary fin_coupling"
     if _num(fc.get("fin_impulse_largest_move_rel")) is not None:
-        note += (f"; largest impulse change over the largest fin impulse {100 * fc['fin_impulse_largest_move_rel']:.2f} %"
-                 f", Δv/v {100 * fc.get('dv_over_v_move_rel', 0.0):+.3f} %")
+        note += f"; largest impulse change over the largest fin impulse {100 * fc['fin_impulse_largest_move_rel']:.2f} %"
+    if _num(fc.get("dv_over_v_move_rel")) is not None:
+        note += f"; Δv/v {100 * fc['dv_over_v_move_rel']:+.3f} %"
     return Item("fin coupling", text, note)
 
 

@@ -167,7 +167,10 @@ def test_the_fin_coupling_row_names_the_fin_whose_impulse_changed_most():
           "fin_impulse_largest_move_rel": 0.0042, "dv_over_v_move_rel": -0.00055}
     item = _coupling_item(fc)
     assert item.value.startswith("staggered") and "rudder_4's impulse -3.13 %" in item.value and not item.bad
-    assert "0.42 %" in item.note
+    assert "0.42 %" in item.note and "Δv/v -0.055 %" in item.note
+    none = _coupling_item({"rigid": {"fin_impulse_ns": {"wing_1": 0.0}}, "fin_impulse_move_rel": {"wing_1": None},
+                           "fin_impulse_largest_move_rel": None, "dv_over_v_move_rel": None})  # no contact at all
+    assert none.value.startswith("staggered") and "against" not in none.value
 
 
 def test_flight_damage_from_the_shell_shows_every_fin_that_lost_area(tmp_path):
