@@ -22,11 +22,13 @@ logging.basicConfig(level=logging.WARNING)
 
 
 def _moves(a: dict, b: dict) -> dict:
-    """b / a − 1 of Δv/v, the CFC peak and each fin's impulse (None where a fin has none in a)."""
-    return {"dv_over_v": b["dv_over_v"] / a["dv_over_v"] - 1.0,
-            "peak_accel_mps2": b["peak_accel_mps2"] / a["peak_accel_mps2"] - 1.0,
-            "fin_impulse_ns": {f: (b["fin_impulse_ns"].get(f, 0.0) / j - 1.0 if j > 0 else None)
-                               for f, j in a["fin_impulse_ns"].items()}}
+    """b / a − 1 of Δv/v, the CFC peak and each fin's impulse (None where a has none), as the stage's
+    ``fin_coupling`` section computes them (``shell.coupling.coupling_section``)."""
+    from flexnet_fe.shell.coupling import coupling_section
+
+    c = coupling_section(a, b, 0.0, 0.0, {})
+    return {"dv_over_v": c["dv_over_v_move_rel"], "peak_accel_mps2": c["peak_accel_move_rel"],
+            "fin_impulse_ns": c["fin_impulse_move_rel"]}
 
 
 def main(run_dir: str, work: str, out: str) -> None:

@@ -64,11 +64,12 @@ def run_staggered(net_cfg, deploy_cfg, missile_cfg, collide_cfg, shell_cfg, air,
     motion, fins = fin_motion(missile_cfg, motion_shell(shell_cfg, motion_mesh), work / "rigid", work / "shell",
                               interval=MOTION_INTERVAL, log=log)
     t2 = time.perf_counter()
+    w_max = float(np.abs(motion.w).max(initial=0.0))
     log.info("collide (fin coupling): 3 of 3, the impact with the fins moving (%d loaded fins, largest |w| %.3g mm)",
-             len(fins), 1e3 * float(np.abs(motion.w).max(initial=0.0)))
+             len(fins), 1e3 * w_max)
     s = run_collide(net_cfg, deploy_cfg, missile_cfg, collide_cfg, air, deploy_dir, stage_dir, log, fin_motion=motion)
     work_j = float(read_history_csv(stage_dir / HISTORY)["fin_motion_work_j"][-1])
-    s["fin_coupling"] = coupling_section(rigid, s, float(np.abs(motion.w).max(initial=0.0)), work_j,
+    s["fin_coupling"] = coupling_section(rigid, s, w_max, work_j,
                                          {"rigid_impact": t1 - t0, "fin_motion": t2 - t1,
                                           "moving_impact": time.perf_counter() - t2})
     s["fin_coupling"].update(motion_mesh_m=motion_mesh, motion_interval_s=MOTION_INTERVAL,
