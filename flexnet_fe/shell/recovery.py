@@ -254,8 +254,9 @@ def sample_nodes(R, u, nodal):
             umax = max(umax, u[b] * u[b] + u[b + 1] * u[b + 1] + u[b + 2] * u[b + 2])
     for i in range(nodal.shape[0]):
         s0 = s1 = s2 = s3 = s4 = s5 = 0.0
-        for p in range(R.gptr[i], R.gptr[i + 1]):
-            k = gind[p]
+        for pp in range(R.gptr[i], R.gptr[i + 1]):
+            p = np.uint64(pp)  # unsigned: no wrap-around test on the gathered index (kernel.U1)
+            k = np.uint64(gind[p])
             u1, u2, t1, t2 = pr[k, 0], pr[k, 1], pr[k, 2], pr[k, 3]
             d1, d2 = g[p, 0], g[p, 1]
             s0 += d1 * u1
