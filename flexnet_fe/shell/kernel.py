@@ -481,8 +481,7 @@ def _fused_step(D, P, St, x, h, acc3, want_se, want_ke):
     se = 0.0
     work = 0.0
     ke = 0.0
-    for ii in range(len(ptr) - 1):
-        i = np.uint64(ii)
+    for i in range(np.uint64(len(ptr) - 1)):  # unsigned counters: ``U1``
         bi = U5 * i
         xi0, xi1, xi2, xi3, xi4 = x[bi], x[bi + U1], x[bi + U2], x[bi + U3], x[bi + U4]
         p0 = np.uint64(ptr[i])
@@ -491,8 +490,7 @@ def _fused_step(D, P, St, x, h, acc3, want_se, want_ke):
         y2 = y[bi + U2] + B[p0, 0] * xi2 + B[p0, 1] * xi3 + B[p0, 2] * xi4
         y3 = y[bi + U3] + B[p0, 3] * xi2 + B[p0, 4] * xi3 + B[p0, 5] * xi4
         y4 = y[bi + U4] + B[p0, 6] * xi2 + B[p0, 7] * xi3 + B[p0, 8] * xi4
-        for pp in range(ptr[i] + 1, ptr[i + U1]):
-            p = np.uint64(pp)
+        for p in range(np.uint64(ptr[i] + 1), np.uint64(ptr[i + U1])):
             bj = U5 * np.uint64(ind[p])
             x0, x1, x2, x3, x4 = x[bj], x[bj + U1], x[bj + U2], x[bj + U3], x[bj + U4]
             m0, m1, m2, m3 = M[p, 0], M[p, 1], M[p, 2], M[p, 3]
