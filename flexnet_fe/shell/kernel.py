@@ -460,8 +460,9 @@ _FAST = {"contract"}  # no 'nnan'/'ninf': blow-ups must stay visible
 
 U1, U2, U3, U4, U5 = (np.uint64(k) for k in range(1, 6))
 """Unsigned offsets: the hot loops index with unsigned integers, for which numba emits no
-negative-index (wrap-around) test; with signed ones the test on every gathered index costs
-1.14–1.25× in the step (side by side, docs/performance.md, twenty-ninth session)."""
+negative-index (wrap-around) test; with signed ones the test on every gathered index cost
+1.1–1.3× in the step and its stress sample (side by side, equal to the bit: benchmarks/shell_kernel_ab.py,
+docs/performance.md, "The shell step with unsigned indices")."""
 
 
 @njit(cache=True, fastmath=_FAST)

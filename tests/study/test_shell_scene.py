@@ -10,7 +10,7 @@ def test_the_shell_study_loads_are_sampled_as_the_case_ships_them():
     # Reference: the case file's own collide.load_interval. The collide study's points sample the fin
     # loads at the output interval (scenes.LOADS_AT_OUTPUT, 10 µs); fed to the shell, those loads
     # low-pass the rope's 1–4 µs strikes and the peak read 26 MPa against 78 MPa as shipped on
-    # wing_3 at 1.25 mm (docs/study/README.md, twenty-ninth session). The shell study's impact must
+    # wing_3 at 1.25 mm (docs/study/PROVENANCE.md, twenty-ninth session). The shell study's impact must
     # keep every sampling setting of the case.
     shipped, case = case_with(CASE, SHIPPED).collide, case_with(CASE, ()).collide
     assert shipped.load_interval == case.load_interval is not None
