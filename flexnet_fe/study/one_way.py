@@ -31,14 +31,12 @@ from pathlib import Path
 
 import numpy as np
 
+from flexnet_fe.study.collide import SHIPPED
 from flexnet_fe.study.common import HEADLINE_TOLERANCE, Context, measured, rel_error
 from flexnet_fe.study.scenes import CASE, case_with
 
 LOG = logging.getLogger("flexnet.study.one_way")
 
-COLLIDE = ("collide.snapshots=2",)
-"""The default impact as shipped (its fin loads at the case's own 0.3125 µs sampling: the shell's
-motion under the strikes is what the second collision sees), two snapshots."""
 # The motion is the staggered coupling's (``shell.coupling``: 5 mm at the loads, ``MOTION_LOCAL_MESH``;
 # sampled every 1 µs, ``MOTION_INTERVAL``): this check is that coupling's step, run as a study.
 SCALES = (2.0, 1.0, 0.5)
@@ -51,11 +49,12 @@ LABEL = "rigid fins in the collision (one-way loading)"
 
 
 def _collide(case_path: Path, ddir: Path, motion=None):
-    """(case, CollisionResult) of the case's impact (``COLLIDE``) on the deployed net in ``ddir``, the
-    fins moving as ``motion`` if given."""
+    """(case, CollisionResult) of the case's impact as shipped (``study.collide.SHIPPED``: its fin loads at
+    the case's own sampling — the shell's motion under the strikes is what the second collision sees) on
+    the deployed net in ``ddir``, the fins moving as ``motion`` if given."""
     from flexnet_fe.study.collide import simulate_case
 
-    case = case_with(case_path, COLLIDE)
+    case = case_with(case_path, SHIPPED)
     return case, simulate_case(case, ddir, fin_motion=motion)[2]
 
 
@@ -66,7 +65,7 @@ def _shell_fins(case_path: Path, res, work: Path):
     from flexnet_fe.shell.coupling import MOTION_INTERVAL, MOTION_LOCAL_MESH, motion_shell
     from flexnet_fe.shell.motion import fin_motion
 
-    scase = case_with(case_path, COLLIDE)
+    scase = case_with(case_path, SHIPPED)
     loads = work / "loads"
     loads.mkdir(parents=True, exist_ok=True)
     net = res.net
