@@ -43,7 +43,7 @@ from flexnet_fe.io import atomic_write_json, read_json
 from flexnet_fe.machine import launched_by_mpirun
 from flexnet_fe.runs import (RESOLVED, STAGE_LOG, STATUS, SUMMARY, RunLock, StageContext, check_run_dir,
                              last_output_time, me, now, partial_dir, process_alive, publish_stage,
-                             interrupt_handled, signal_handlers, stage_dir)
+                             interrupt_handled, signal_handlers, signals_deferred, stage_dir)
 from flexnet_fe.stages import REGISTRY, STAGE_ORDER, Stage, pipeline_order_error
 
 LOG = logging.getLogger("flexnet")
@@ -153,7 +153,8 @@ def _check_upstream(case: Case, wanted: list[Stage], status: Status, run_dir: Pa
 
 def _stage_logger(folder: Path, stage: Stage) -> tuple[logging.Logger, logging.Handler]:
     log = logging.getLogger(f"flexnet.{stage.value}")
-    handler = logging.FileHandler(folder / STAGE_LOG, mode="w")
+    with signals_deferred():  # not a half-made handler (runs.signals_deferred)
+        handler = logging.FileHandler(folder / STAGE_LOG, mode="w")
     handler.setFormatter(logging.Formatter("%(asctime)s %(levelname)s %(message)s"))
     log.addHandler(handler)
     return log, handler
@@ -282,9 +283,10 @@ def _run_stage(run: _Run, stage: Stage, func: Callable[[StageContext], dict]) ->
         if distributed:
             _send(comm, STAGE_ORDER.index(stage))
         section = func(StageContext(run.case, run.case_dir, run.run_dir, part, log, comm))
-        log.removeHandler(handler)
-        handler.close()
-        handler = None
+        with signals_deferred():
+            log.removeHandler(handler)
+            handler.close()
+            handler = None
         publish_stage(run.run_dir, stage.value)
         summary[stage.value] = section
         atomic_write_json(run.run_dir / SUMMARY, summary)

@@ -196,6 +196,8 @@ class _SignalState:
     handled: bool = False
     redeliver: threading.Thread | None = None
     depth: int = 0
+    deferring: int = 0
+    deferred: int | None = None
 
 
 _SIG = _SignalState()
@@ -217,6 +219,9 @@ def _on_signal(signum, frame):
 
     if _SIG.handled:
         return  # the clean-up is running (a few renames and writes): let it finish
+    if _SIG.deferring:
+        _SIG.deferred = signum  # raised when the signals_deferred block ends
+        return
     if _propagating():
         return  # the last Interrupted is still on its way out (through slow clean-ups: a process
         #         joined): a second one would cut them short, or land in the handler itself
@@ -273,6 +278,26 @@ def interrupt_handled() -> None:
     """Called by the code that caught :class:`Interrupted`: no re-delivery, and further
     SIGINT/SIGTERM are ignored until the outermost :func:`signal_handlers` block ends."""
     _SIG.handled = True
+
+
+@contextmanager
+def signals_deferred():
+    """A signal arriving inside the block raises its :class:`Interrupted` when the block ends, not
+    in the middle: for a few lines that must not be cut in half. A ``logging.FileHandler`` is
+    registered for flushing at exit before its stream is set; interrupted between the two, it
+    is flushed at exit and prints "Exception ignored in atexit callback … AttributeError" after the
+    interrupt's one line (CI's test_signal_in_deploy[SIGINT], 2026-11-29). (Blocking the signal with
+    ``pthread_sigmask`` would not do: the kernel hands a process-directed signal to any thread that
+    does not block it — numba's, the re-delivery thread — and Python runs the handler in the main
+    thread all the same.)"""
+    _SIG.deferring += 1
+    try:
+        yield
+    finally:
+        _SIG.deferring -= 1
+    if _SIG.deferring == 0 and _SIG.deferred is not None:
+        signum, _SIG.deferred = _SIG.deferred, None
+        _on_signal(signum, None)
 
 
 @contextmanager

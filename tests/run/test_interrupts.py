@@ -151,6 +151,37 @@ def test_a_slow_clean_up_is_not_cut_short_by_the_redelivery():
     assert (out.returncode, out.stdout.split("\n")[:2]) == (143, ["clean-up done", "caught 143"]), out
 
 
+_DEFERRED = """
+import logging, os, signal, sys, time
+from flexnet_fe.runs import interrupt_handled, signal_handlers, signals_deferred
+
+try:
+    with signal_handlers():
+        with signals_deferred():
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(0.5)
+            print("block done", flush=True)
+        print("after the block", flush=True)
+except KeyboardInterrupt as err:
+    interrupt_handled()
+    print("caught", err.exit_code)
+    sys.exit(err.exit_code)
+"""
+
+
+def test_a_signal_inside_signals_deferred_is_raised_at_its_end():
+    # Reference: runs.signals_deferred's contract. SIGINT sent inside the block lets the block finish
+    # (0.5 s, two redelivery periods) and is raised as it ends, before the next line: exit 130. The
+    # pipeline makes each stage's log handler inside one — a handler cut in half was flushed at exit
+    # and printed a traceback after the interrupt's line (CI, 2026-11-29).
+    import subprocess
+    import sys
+
+    out = subprocess.run([sys.executable, "-c", _DEFERRED], capture_output=True, text=True, cwd=ROOT, timeout=60)
+    assert (out.returncode, out.stdout.split("\n")[:2]) == (130, ["block done", "caught 130"]), out
+    assert "Traceback" not in out.stderr, out.stderr
+
+
 @pytest.mark.parametrize("name", ["SIGINT", "SIGTERM"])
 def test_signal_in_deploy(tmp_path, name):
     sig, code = SIGNALS[name]
