@@ -43,13 +43,74 @@ def _label(r: dict) -> str:
     return f"{r['knob'].split('.')[-1]}={r['value']}"
 
 
+LABEL_PT = 7
+"""Font size of the point labels [pt]."""
+
+
+def _boxes_overlap(a: tuple, b: tuple) -> bool:
+    """Axis-aligned boxes (x0, y0, x1, y1) overlap."""
+    return a[0] < b[2] and b[0] < a[2] and a[1] < b[3] and b[1] < a[3]
+
+
+def label_offsets(anchors: np.ndarray, widths: np.ndarray, height: float, frame: tuple,
+                  keep_clear: float = 6.0) -> list:
+    """Greedy placement of point labels without overlaps: for each point (display coordinates
+    ``anchors`` (n, 2) [pt], label sizes ``widths`` (n,) × ``height`` [pt]) the first offset [pt] of a
+    ring of candidates around it, then of wider rings, whose box lies inside ``frame`` (x0, y0, x1, y1)
+    [pt] and overlaps no label placed before it and no point (a disc of ``keep_clear`` pt). Returns
+    [(dx, dy, leader)] per point: ``leader`` is True past the first ring, where the label is drawn with
+    a line to its point. A point whose every candidate collides gets the last (the chart is crowded
+    there; its label may overlap)."""
+    placed: list[tuple] = []
+    out = []
+    for (x, y), w in zip(anchors, widths):
+        choice = None
+        for ring, r in enumerate((4.0, 14.0, 26.0, 40.0)):
+            for dx, dy in ((r, r), (r, -r - height), (-r - w, r), (-r - w, -r - height), (r, -height / 2),
+                           (-r - w, -height / 2), (-w / 2, r + 2), (-w / 2, -r - height - 2)):
+                box = (x + dx, y + dy, x + dx + w, y + dy + height)
+                outside = box[0] < frame[0] or box[1] < frame[1] or box[2] > frame[2] or box[3] > frame[3]
+                hits_label = outside or any(_boxes_overlap(box, b) for b in placed)
+                hits_point = any(_boxes_overlap(box, (px - keep_clear, py - keep_clear, px + keep_clear,
+                                                      py + keep_clear)) for px, py in anchors)
+                choice = (dx, dy, ring > 0, box)
+                if not (hits_label or hits_point):
+                    break
+            else:
+                continue
+            break
+        placed.append(choice[3])
+        out.append(choice[:3])
+    return out
+
+
+def _annotate_points(ax, fig, xs, ys, labels: list[str]) -> None:
+    """Point labels placed by :func:`label_offsets` (axes limits final: call after the scatters)."""
+    fig.canvas.draw()  # fixes the autoscaled limits, hence the data → display transform
+    px_per_pt = fig.dpi / 72.0
+    anchors = ax.transData.transform(np.column_stack([xs, ys])) / px_per_pt
+    widths = np.array([0.55 * LABEL_PT * len(t) for t in labels])
+    frame = tuple(ax.get_window_extent().extents / px_per_pt)
+    for (dx, dy, leader), t, x, y in zip(label_offsets(anchors, widths, LABEL_PT * 1.2, frame), labels, xs, ys):
+        ax.annotate(t, (x, y), textcoords="offset points", xytext=(dx, dy), fontsize=LABEL_PT,
+                    arrowprops=dict(arrowstyle="-", color="0.5", lw=0.6, shrinkA=0, shrinkB=4) if leader else None)
+
+
+NAMED_POINTS_MAX = 10
+"""Charts with more points than this label them by number, with a key under the chart (names crowd)."""
+
+
 def accuracy_chart(stage: str, rows: list[dict], path: Path, title: str) -> None:
     """One panel per headline: relative error vs CPU time [s], log-log."""
     cols = [k for k in rows[0] if k.startswith("err_")]
     wide = len(cols) > 1
-    fig, axes = plt.subplots(1, len(cols), figsize=(5.2 * len(cols) if wide else 8.0, 4.6 if wide else 5.4),
-                             squeeze=False)
     ok = [r for r in rows if r["status"] == "ok"]
+    names = [_label(r) for r in ok]
+    numbered = len(ok) > NAMED_POINTS_MAX
+    key_rows = math.ceil(len(ok) / (4 if wide else 2)) if numbered else 0
+    key_h = 0.16 * key_rows  # [in]
+    fig, axes = plt.subplots(1, len(cols), squeeze=False,
+                             figsize=(5.2 * len(cols) if wide else 8.0, (4.6 if wide else 5.4) + key_h))
     cost = np.array([r["cpu_s"] for r in ok], dtype=float)
     for ax, col in zip(axes[0], cols):
         err = np.array([max(r[col], ERR_FLOOR) for r in ok], dtype=float)
@@ -59,12 +120,11 @@ def accuracy_chart(stage: str, rows: list[dict], path: Path, title: str) -> None
         ax.scatter(cost[front], err[front], s=260, facecolors="none", edgecolors="0.4", lw=1.2,
                    label="on the Pareto front (CPU ±15 %, errors < 0.01 % equal)")
         ax.axhspan(ERR_FLOOR / 2, ERR_RESOLUTION, color="0.9", zorder=0, label="error < 0.01 % (not resolved)")
-        for k, (r, c, e) in enumerate(zip(ok, cost, err)):
+        for r, c, e in zip(ok, cost, err):
             style = (dict(marker="*", s=220, color="tab:red", zorder=5, label="shipped default")
                      if r["is_default"] else dict(marker="s", s=60, color="k", zorder=4, label="reference")
                      if r["is_reference"] else dict(marker="o", s=36, color="tab:blue", zorder=3, label="variant"))
             ax.scatter([c], [e], **style)
-            ax.annotate(_label(r), (c, e), textcoords="offset points", xytext=(4, 4 - 9 * (k % 4)), fontsize=7)
         ax.axhline(HEADLINE_TOLERANCE, color="tab:orange", ls="--", lw=1, label="2 % bar")
         ax.set_xscale("log")
         ax.set_yscale("log")
@@ -74,9 +134,19 @@ def accuracy_chart(stage: str, rows: list[dict], path: Path, title: str) -> None
         ax.grid(True, which="both", alpha=0.3)
     h, lab = axes[0][0].get_legend_handles_labels()
     uniq = dict(zip(lab, h))
-    fig.legend(uniq.values(), uniq.keys(), fontsize=8, loc="lower center", ncol=6 if wide else 3, frameon=False)
+    fig.legend(uniq.values(), uniq.keys(), fontsize=8, loc="lower center", ncol=6 if wide else 3, frameon=False,
+               bbox_to_anchor=(0.5, (key_h + 0.05) / fig.get_figheight()))
     fig.suptitle(f"{title} (errors of 0 drawn at {ERR_FLOOR:g})", fontsize=10)
-    fig.tight_layout(rect=(0, 0.09 if wide else 0.13, 1, 1))
+    bottom = ((0.42 if wide else 0.7) + key_h) / fig.get_figheight()
+    if numbered:
+        per_row = 4 if wide else 2
+        for k, name in enumerate(names):
+            fig.text((0.06 + (k % per_row) / per_row * 0.9), (key_h - 0.16 * (k // per_row)) / fig.get_figheight(),
+                     f"{k + 1}: {name}", fontsize=LABEL_PT + 1, va="top")
+    fig.tight_layout(rect=(0, bottom, 1, 1))
+    labels = [str(k + 1) for k in range(len(ok))] if numbered else names
+    for ax, col in zip(axes[0], cols):  # after the layout: the labels are placed in its final coordinates
+        _annotate_points(ax, fig, cost, [max(r[col], ERR_FLOOR) for r in ok], labels)
     fig.savefig(path, dpi=110)
     plt.close(fig)
 
