@@ -86,7 +86,7 @@ def test_paper_case_closes_momentum_and_energy_from_its_files(tmp_path, case):
 
     root = Path(__file__).resolve().parents[2]
     # The cases' max_duration (30 ms) is set to the 3 ms here: a longer cap would widen the crop and
-    # run on while the rope touches. radar_rotary's cut at the fins (0.7 mm) is set to 1.4 mm to
+    # run on while the rope touches. radar_rotary's cut at the fins (0.175 mm) is set to 1.4 mm to
     # keep this test cheap: momentum and energy close at any rope resolution (the kernel's balance
     # does not depend on it; the 1.4 mm pieces are the other cases' and as light).
     extra = ["collide.fin_piece_length=1.4e-3"] if case == "radar_rotary" else []
