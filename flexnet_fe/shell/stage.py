@@ -598,7 +598,7 @@ def setup_fin(shell: ShellConfig, spec: FinSpec, contacts: FinContacts, acc_t, a
 
 MASS_SCALING_MEASURED = 1.25
 """The largest ``shell.mass_scaling`` measured to move none of radar_traction's eight fin peaks and
-strike envelopes by 2 % against no scaling (−1.0…+1.7 %, thirtieth session; 1.5 moved a rudder's
+strike envelopes by 2 % against no scaling (−1.0…+1.7 %, thirtieth session; 1.5 moved a rudder peak
 +4.7 %; docs/validation.md, "Selective mass scaling"). A larger ratio adds a warning per scaled fin."""
 
 WINDOW_BOUND_FACTOR = 2.0

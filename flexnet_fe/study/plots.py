@@ -118,8 +118,8 @@ def accuracy_chart(stage: str, rows: list[dict], path: Path, title: str) -> None
         order = np.argsort(cost[front])
         ax.step(cost[front][order], err[front][order], where="post", color="0.5", lw=1.2)
         ax.scatter(cost[front], err[front], s=260, facecolors="none", edgecolors="0.4", lw=1.2,
-                   label=f"on the Pareto front (none {100 * COST_NOISE:.0f} % cheaper and as accurate, "
-                         "or as cheap and under half the error)")
+                   label=f"on the Pareto front: no point {100 * COST_NOISE:.0f} % cheaper and as accurate,\n"
+                         "nor one as cheap (within as much) with under half the error")
         ax.axhspan(ERR_FLOOR / 2, ERR_RESOLUTION, color="0.9", zorder=0, label="error < 0.01 % (not resolved)")
         for r, c, e in zip(ok, cost, err):
             style = (dict(marker="*", s=220, color="tab:red", zorder=5, label="shipped default")
