@@ -16,6 +16,7 @@ import csv
 import json
 import math
 import shutil
+import statistics
 import sys
 from pathlib import Path
 
@@ -31,9 +32,12 @@ def rows_of(stats: dict) -> dict[str, dict]:
     return out
 
 
+IMPULSE = "collide.fin_impulse_ns."
+
+
 def member_values(path: Path) -> dict[str, dict[str, float]]:
-    """member label → quantity → value (the fins' governing stresses [Pa] and the headlines),
-    read from an ensemble's member table; members with an error left out."""
+    """member label → quantity → value (the fins' governing stresses [Pa], the headlines and each
+    fin's impulse [N s]), read from an ensemble's member table; members with an error left out."""
     from flexnet_fe.ensemble import HEADLINES, fin_names, governing, largest_fin_stress
 
     rows = [r for r in csv.DictReader(open(path / "ensemble.csv")) if not r.get("error")]
@@ -41,11 +45,22 @@ def member_values(path: Path) -> dict[str, dict[str, float]]:
     out = {}
     for r in rows:
         vals = {k: float(r[k]) for k in HEADLINES if r.get(k) not in (None, "")}
+        vals.update({f"{k[len(IMPULSE):]} impulse [N s]": float(r[k]) for k in r
+                     if k.startswith(IMPULSE) and r[k] not in (None, "")})
         vals.update({f"{f} [MPa]": float(governing(r, f)) for f in fins if governing(r, f) not in (None, "")})
         if fins:
             vals["largest fin stress [MPa]"] = largest_fin_stress(r, fins)
         out[r["label"] + f"@{r['aim_x_m']},{r['aim_y_m']}"] = vals
     return out
+
+
+def member_stats(members: dict, q: str) -> dict | None:
+    """mean, standard error, standard deviation and range of q over the members (≥ 2 values)."""
+    v = [m[q] for m in members.values() if q in m]
+    if len(v) < 2:
+        return None
+    sd = statistics.stdev(v)
+    return {"mean": statistics.mean(v), "sem": sd / math.sqrt(len(v)), "std": sd, "min": min(v), "max": max(v)}
 
 
 def paired(a: dict, b: dict, q: str) -> str:
@@ -73,10 +88,11 @@ def plot(ens: list, path: Path) -> None:
     width = 0.6 / max(len(ens) - 1, 1)
     for i, q in enumerate(quantities):
         xs = [i - 0.3 + j * width for j in range(len(ens))]
-        for m in ens[0][2]:
-            ys = [e[2].get(m, {}).get(q) for e in ens]
-            if all(y is not None for y in ys):
-                ax.plot(xs, [1e-6 * y for y in ys], "-", color="0.75", lw=0.6, zorder=1)
+        for j in range(len(ens) - 1):  # the same aim point joined between neighbouring ensembles
+            for m in ens[j][2]:
+                y0, y1 = ens[j][2][m].get(q), ens[j + 1][2].get(m, {}).get(q)
+                if y0 is not None and y1 is not None:
+                    ax.plot(xs[j:j + 2], [1e-6 * y0, 1e-6 * y1], "-", color="0.75", lw=0.6, zorder=1)
         for j, (label, stats, members) in enumerate(ens):
             ys = [1e-6 * v[q] for v in members.values() if q in v]
             ax.plot([xs[j]] * len(ys), ys, "o", color=f"C{j}", ms=3.5, alpha=0.8, zorder=2,
@@ -89,7 +105,7 @@ def plot(ens: list, path: Path) -> None:
     ax.set_ylabel("von Mises held to [MPa]")
     ax.grid(True, axis="y", alpha=0.4)
     ax.legend(fontsize=8, ncol=2)
-    ax.set_title("radar × traction: ensembles over one net cell at two rope resolutions "
+    ax.set_title(f"radar × traction: ensembles over one net cell at {len(ens)} rope resolutions "
                  "(grey: the same aim point)", fontsize=9)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
@@ -104,7 +120,12 @@ def main(argv: list[str]) -> None:
         safe = label.replace(" ", "_").replace(".", "p")
         shutil.copy(Path(path) / "ensemble.json", DOCS / "data" / f"ensemble_{safe}.json")
         shutil.copy(Path(path) / "ensemble.csv", DOCS / "data" / f"ensemble_{safe}.csv")
-        ens.append((label, rows_of(stats), member_values(Path(path))))
+        members = member_values(Path(path))
+        rows = rows_of(stats)
+        for q in next(iter(members.values()), {}):  # each fin's impulse: from the member table
+            if q.endswith("impulse [N s]"):
+                rows[q] = member_stats(members, q)
+        ens.append((label, rows, members))
     ref_label, ref, ref_members = ens[0]
     head = "| quantity | " + " | ".join(f"{lab}: mean ± s.e. (s.d.; range)" for lab, _, _ in ens)
     head += "".join(f" | {lab} − {ref_label} (z) | paired" for lab, _, _ in ens[1:]) + " |"

@@ -48,13 +48,17 @@ class Context:
 
 @dataclass(frozen=True)
 class Point:
-    """One variant of a stage: ``knob`` set to ``value`` through case overrides (``--set`` text)."""
+    """One variant of a stage: ``knob`` set to ``value`` through case overrides (``--set`` text).
+    ``excluded``: why the point cannot be a default although the stage's headlines may favour it (a
+    cost measured downstream, stated with its evidence); it is run, tabled and drawn, but not a
+    candidate for the front (empty: a candidate)."""
 
     knob: str
     value: Any
     overrides: tuple[str, ...]
     is_default: bool = False
     is_reference: bool = False
+    excluded: str = ""
 
 
 def measured(fn: Callable[[], Any]) -> tuple[Any, float, float]:
@@ -130,7 +134,8 @@ def run_points(stage: str, points: list[Point], runner: Callable[[Point], tuple[
             continue
         q, extra, cpu, wall, status = results[p]
         row = {"stage": stage, "knob": p.knob, "value": p.value, "cpu_s": cpu, "wall_s": wall,
-               "is_default": p.is_default, "is_reference": p.is_reference, "status": status}
+               "is_default": p.is_default, "is_reference": p.is_reference, "status": status,
+               "excluded": p.excluded}
         for name in ref:
             row[f"err_{name}"] = rel_error(q.get(name), ref[name]) if q else math.nan
             v = q.get(name) if q else None
@@ -176,18 +181,21 @@ def pareto_mask(cost: np.ndarray, err: np.ndarray) -> np.ndarray:
 
 
 def verdict(rows: list[dict], tolerance: float = HEADLINE_TOLERANCE) -> dict:
-    """Is the default on the Pareto front (CPU time vs worst headline error), and are all its
-    headline errors within ``tolerance``? Also the cheapest point within tolerance."""
+    """Is the default on the Pareto front (CPU time vs worst headline error) of the candidate points
+    (those not ``excluded``), and are all its headline errors within ``tolerance``? Also the cheapest
+    candidate within tolerance."""
     cost = np.array([r["cpu_s"] for r in rows], dtype=float)
     err = np.array([worst_error(r) for r in rows], dtype=float)
-    front = pareto_mask(cost, err)
+    candidate = np.array([not r.get("excluded") for r in rows], dtype=bool)
+    front = pareto_mask(cost, np.where(candidate, err, math.nan))  # NaN: never on the front
     for r, f in zip(rows, front):
         r["on_front"] = bool(f)
     d = next((i for i, r in enumerate(rows) if r["is_default"]), None)
     if d is None:
         return {"default_on_front": None, "default_within": None, "default_worst_error": None,
                 "cheapest_within": None}
-    ok = [i for i in range(len(rows)) if np.isfinite(err[i]) and err[i] <= tolerance and not rows[i]["is_reference"]]
+    ok = [i for i in range(len(rows)) if candidate[i] and np.isfinite(err[i]) and err[i] <= tolerance
+          and not rows[i]["is_reference"]]
     cheapest = min(ok, key=lambda i: cost[i]) if ok else None
     return {"default_on_front": bool(front[d]), "default_within": bool(err[d] <= tolerance),
             "default_worst_error": float(err[d]), "tolerance": tolerance,

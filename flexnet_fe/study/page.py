@@ -38,6 +38,7 @@ def _machine(rec: dict) -> str:
 def _accuracy(rec: dict) -> list[str]:
     name, rows, v = rec["name"], rec["rows"], rec.get("verdict", {})
     errs = [k for k in rows[0] if k.startswith("err_")] if rows else []
+    shown = [k for k in rows[0] if k.endswith("_own_err")] if rows else []  # reported, not in the verdict
     out = [f"### {name}", "", _machine(rec), ""]
     out += [f"- {n}" for n in rec["notes"]]
     if v.get("default_on_front") is not None:
@@ -48,7 +49,11 @@ def _accuracy(rec: dict) -> list[str]:
                     f"{_f(v['default_worst_error'], True)}; cheapest point within {HEADLINE_TOLERANCE:.0%}: "
                     f"{v['cheapest_within'] or 'none'})." + ("" if ok else " The default does not meet the issue's "
                                                                           "bar here; see the table.")]
-    out += [""] + _table(rows, ["knob", "value", "cpu_s", "wall_s", *errs, "on_front", "status"], set(errs))
+    out += [""] + _table(rows, ["knob", "value", "cpu_s", "wall_s", *errs, *shown, "on_front", "status"],
+                         set(errs) | set(shown))
+    excluded = [f"- excluded from the front: {r['knob']} = {r['value']}: {r['excluded']}"
+                for r in rows if r.get("excluded")]
+    out += [""] + excluded if excluded else []
     out += ["", f"![{name}: accuracy against cost]({name}_accuracy.png)", ""]
     return out
 

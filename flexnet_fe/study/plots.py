@@ -112,9 +112,10 @@ def accuracy_chart(stage: str, rows: list[dict], path: Path, title: str) -> None
     fig, axes = plt.subplots(1, len(cols), squeeze=False,
                              figsize=(5.2 * len(cols) if wide else 8.0, (4.6 if wide else 5.4) + key_h))
     cost = np.array([r["cpu_s"] for r in ok], dtype=float)
+    candidate = np.array([not r.get("excluded") for r in ok], dtype=bool)
     for ax, col in zip(axes[0], cols):
         err = np.array([max(r[col], ERR_FLOOR) for r in ok], dtype=float)
-        front = pareto_mask(cost, err)
+        front = pareto_mask(cost, np.where(candidate, err, np.nan))
         order = np.argsort(cost[front])
         ax.step(cost[front][order], err[front][order], where="post", color="0.5", lw=1.2)
         ax.scatter(cost[front], err[front], s=260, facecolors="none", edgecolors="0.4", lw=1.2,
@@ -124,7 +125,9 @@ def accuracy_chart(stage: str, rows: list[dict], path: Path, title: str) -> None
         for r, c, e in zip(ok, cost, err):
             style = (dict(marker="*", s=220, color="tab:red", zorder=5, label="shipped default")
                      if r["is_default"] else dict(marker="s", s=60, color="k", zorder=4, label="reference")
-                     if r["is_reference"] else dict(marker="o", s=36, color="tab:blue", zorder=3, label="variant"))
+                     if r["is_reference"] else dict(marker="X", s=60, color="0.45", zorder=3,
+                                                     label="excluded from the front (why: under the table)")
+                     if r.get("excluded") else dict(marker="o", s=36, color="tab:blue", zorder=3, label="variant"))
             ax.scatter([c], [e], **style)
         ax.axhline(HEADLINE_TOLERANCE, color="tab:orange", ls="--", lw=1, label="2 % bar")
         ax.set_xscale("log")
