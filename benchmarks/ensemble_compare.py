@@ -16,7 +16,6 @@ import csv
 import json
 import math
 import shutil
-import statistics
 import sys
 from pathlib import Path
 
@@ -52,15 +51,6 @@ def member_values(path: Path) -> dict[str, dict[str, float]]:
             vals["largest fin stress [MPa]"] = largest_fin_stress(r, fins)
         out[r["label"] + f"@{r['aim_x_m']},{r['aim_y_m']}"] = vals
     return out
-
-
-def member_stats(members: dict, q: str) -> dict | None:
-    """mean, standard error, standard deviation and range of q over the members (≥ 2 values)."""
-    v = [m[q] for m in members.values() if q in m]
-    if len(v) < 2:
-        return None
-    sd = statistics.stdev(v)
-    return {"mean": statistics.mean(v), "sem": sd / math.sqrt(len(v)), "std": sd, "min": min(v), "max": max(v)}
 
 
 def paired(a: dict, b: dict, q: str) -> str:
@@ -113,6 +103,8 @@ def plot(ens: list, path: Path) -> None:
 
 
 def main(argv: list[str]) -> None:
+    from flexnet_fe.ensemble import statistics as ensemble_statistics
+
     ens = []
     for arg in argv:
         label, path = arg.split(":", 1)
@@ -124,7 +116,7 @@ def main(argv: list[str]) -> None:
         rows = rows_of(stats)
         for q in next(iter(members.values()), {}):  # each fin's impulse: from the member table
             if q.endswith("impulse [N s]"):
-                rows[q] = member_stats(members, q)
+                rows[q] = ensemble_statistics([m[q] for m in members.values() if q in m], stats["tolerance"])
         ens.append((label, rows, members))
     ref_label, ref, ref_members = ens[0]
     head = "| quantity | " + " | ".join(f"{lab}: mean ± s.e. (s.d.; range)" for lab, _, _ in ens)

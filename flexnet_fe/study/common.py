@@ -180,22 +180,27 @@ def pareto_mask(cost: np.ndarray, err: np.ndarray) -> np.ndarray:
     return on
 
 
+def candidate_front(rows: list[dict], cost: np.ndarray, err: np.ndarray) -> np.ndarray:
+    """:func:`pareto_mask` over the candidate rows: an ``excluded`` row is never on the front."""
+    candidate = np.array([not r.get("excluded") for r in rows], dtype=bool)
+    return pareto_mask(cost, np.where(candidate, err, math.nan))
+
+
 def verdict(rows: list[dict], tolerance: float = HEADLINE_TOLERANCE) -> dict:
     """Is the default on the Pareto front (CPU time vs worst headline error) of the candidate points
     (those not ``excluded``), and are all its headline errors within ``tolerance``? Also the cheapest
     candidate within tolerance."""
     cost = np.array([r["cpu_s"] for r in rows], dtype=float)
     err = np.array([worst_error(r) for r in rows], dtype=float)
-    candidate = np.array([not r.get("excluded") for r in rows], dtype=bool)
-    front = pareto_mask(cost, np.where(candidate, err, math.nan))  # NaN: never on the front
+    front = candidate_front(rows, cost, err)
     for r, f in zip(rows, front):
         r["on_front"] = bool(f)
     d = next((i for i, r in enumerate(rows) if r["is_default"]), None)
     if d is None:
         return {"default_on_front": None, "default_within": None, "default_worst_error": None,
                 "cheapest_within": None}
-    ok = [i for i in range(len(rows)) if candidate[i] and np.isfinite(err[i]) and err[i] <= tolerance
-          and not rows[i]["is_reference"]]
+    ok = [i for i, r in enumerate(rows) if not r.get("excluded") and np.isfinite(err[i]) and err[i] <= tolerance
+          and not r["is_reference"]]
     cheapest = min(ok, key=lambda i: cost[i]) if ok else None
     return {"default_on_front": bool(front[d]), "default_within": bool(err[d] <= tolerance),
             "default_worst_error": float(err[d]), "tolerance": tolerance,

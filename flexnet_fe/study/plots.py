@@ -12,7 +12,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from flexnet_fe.study.common import COST_NOISE, ERR_RESOLUTION, HEADLINE_TOLERANCE, pareto_mask  # noqa: E402
+from flexnet_fe.study.common import COST_NOISE, ERR_RESOLUTION, HEADLINE_TOLERANCE, candidate_front  # noqa: E402
 
 ERR_FLOOR = 1e-6
 """Errors of exactly zero (the reference itself, or a knob that changes nothing) are drawn here."""
@@ -112,10 +112,9 @@ def accuracy_chart(stage: str, rows: list[dict], path: Path, title: str) -> None
     fig, axes = plt.subplots(1, len(cols), squeeze=False,
                              figsize=(5.2 * len(cols) if wide else 8.0, (4.6 if wide else 5.4) + key_h))
     cost = np.array([r["cpu_s"] for r in ok], dtype=float)
-    candidate = np.array([not r.get("excluded") for r in ok], dtype=bool)
     for ax, col in zip(axes[0], cols):
         err = np.array([max(r[col], ERR_FLOOR) for r in ok], dtype=float)
-        front = pareto_mask(cost, np.where(candidate, err, np.nan))
+        front = candidate_front(ok, cost, err)
         order = np.argsort(cost[front])
         ax.step(cost[front][order], err[front][order], where="post", color="0.5", lw=1.2)
         ax.scatter(cost[front], err[front], s=260, facecolors="none", edgecolors="0.4", lw=1.2,
